@@ -1,0 +1,69 @@
+"""Gymnasium registration of slipenv's environments.
+
+Each registered id is :class:`~slipenv.envs.slip_env.SlipEnv` with a preset configuration;
+every preset field can still be overridden with ``gymnasium.make(id, **kwargs)``.
+
+=====================================  =====================================================
+id                                     task
+=====================================  =====================================================
+``slipenv/FarmField-v0``               Lindgren's 2WD farm vehicle, 4 m circles on field loam
+``slipenv/TrackedSlopeCircle-v0``      Yamauchi's tracked vehicle, r = 0.25 m circle, 15°
+                                       sandy side slope, 5 cm/s
+``slipenv/RoverMounds-v0``             Reina's 4WS rover crossing lunar-simulant sand with
+                                       mounds (slalom at 8 cm/s)
+``slipenv/HuskySand-v0``               pybullet_data's Husky on loose sand, s-curve
+``slipenv/Configurable-v0``            everything a kwarg (defaults: Husky, circle, sand)
+=====================================  =====================================================
+"""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+
+ENTRY_POINT = "slipenv.envs.slip_env:SlipEnv"
+
+PRESETS: dict[str, dict] = {
+    "slipenv/FarmField-v0": dict(
+        vehicle="farm_2wd", terrain="flat", soil="field_loam", force_model="linear",
+        path="lindgren_circles", path_kwargs={"radius_m": 4.0, "speed_mps": 0.6},
+        max_episode_s=140.0,
+    ),
+    "slipenv/TrackedSlopeCircle-v0": dict(
+        vehicle="tracked_patako",
+        terrain={"kind": "slope", "slope_deg": 15.0, "downhill_azimuth_deg": -90.0},
+        soil="toyoura_sand", force_model="janosi",
+        path="circle", path_kwargs={"radius_m": 0.25, "speed_mps": 0.05, "loops": 1.0},
+        max_episode_s=60.0, max_cross_track_m=0.5,
+    ),
+    "slipenv/RoverMounds-v0": dict(
+        vehicle="rover_4ws", terrain={"kind": "mounds", "mound_height_m": 0.06,
+                                      "mound_radius_m": 0.4, "mound_count": 30,
+                                      "size_m": 14.0, "clear_radius_m": 0.6},
+        soil="lunar_simulant", force_model="reina",
+        path="slalom", path_kwargs={"n_gates": 3, "gate_spacing_m": 1.5, "amplitude_m": 0.3,
+                                    "speed_mps": 0.08},
+        max_episode_s=90.0, max_cross_track_m=1.0,
+    ),
+    "slipenv/HuskySand-v0": dict(
+        vehicle="husky", terrain="flat", soil="loose_sand", force_model="reina",
+        path="s_curve", path_kwargs={"length_m": 10.0, "offset_m": 2.0, "speed_mps": 0.6},
+        max_episode_s=40.0,
+    ),
+    "slipenv/Configurable-v0": dict(
+        path="circle", path_kwargs={"radius_m": 3.0, "speed_mps": 0.5}, max_episode_s=60.0,
+    ),
+}
+
+
+def register_envs() -> None:
+    """Register every slipenv environment id with Gymnasium (idempotent)."""
+    for env_id, kwargs in PRESETS.items():
+        if env_id in gym.registry:
+            continue
+        steps = int(math.ceil(kwargs["max_episode_s"] * 20.0))
+        gym.register(
+            id=env_id, entry_point=ENTRY_POINT, kwargs=dict(kwargs),
+            max_episode_steps=steps, disable_env_checker=False,
+        )

@@ -1,0 +1,121 @@
+"""The onboard sensors: each a small class with ``measure(truth, rng) -> reading``.
+
+Every random draw comes from the ``np.random.Generator`` passed in (the env's, seeded by
+``reset(seed)``). Readings follow the log-format conventions (REP 103, SI units).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from slipenv.sensors.frame import SensorFrame
+from slipenv.sensors.noise import G_MPS2, SensorNoise
+from slipenv.sim.simulator import VehicleTruth
+
+
+class WheelEncoders:
+    """Incremental encoders on each drive channel: cumulative integer counts.
+
+    Quantisation is the encoder's only error (Lindgren §2.4: 285 counts/rad).
+    """
+
+    def __init__(self, counts_per_rad: float) -> None:
+        self.counts_per_rad = counts_per_rad
+
+    def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> np.ndarray:
+        return np.floor(truth.channel_angle_rad * self.counts_per_rad).astype(np.int64)
+
+
+class TorqueSensors:
+    """Wheel torque per channel with relative noise and an uncalibrated scale."""
+
+    def __init__(self, rel_std: float, scale: float) -> None:
+        self.rel_std, self.scale = rel_std, scale
+
+    def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> np.ndarray:
+        tq = truth.channel_torque_nm
+        noise = rng.standard_normal(tq.shape) * self.rel_std * (np.abs(tq) + 1e-3)
+        return self.scale * (tq + noise)
+
+
+class Imu:
+    """Forward/lateral accelerometers (specific force, m/s²) and yaw gyro (rad/s)."""
+
+    def __init__(self, noise: SensorNoise) -> None:
+        self.std_ax = math.sqrt(noise.acc_x_var_g2) * G_MPS2
+        self.std_ay = math.sqrt(noise.acc_y_var_g2) * G_MPS2
+        self.std_g = math.sqrt(noise.gyro_var_rad2_s2)
+        self.bias = noise.gyro_bias_rad_s
+
+    def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> tuple[float, float, float]:
+        e = rng.standard_normal(3)
+        ax, ay, _ = truth.specific_force_body_mps2
+        return (
+            ax + self.std_ax * e[0],
+            ay + self.std_ay * e[1],
+            truth.yaw_rate_rad_s + self.bias + self.std_g * e[2],
+        )
+
+
+class Inclinometer:
+    """Roll and pitch [rad] with white noise."""
+
+    def __init__(self, std_rad: float) -> None:
+        self.std = std_rad
+
+    def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> tuple[float, float]:
+        e = rng.standard_normal(2)
+        return truth.roll_rad + self.std * e[0], truth.pitch_rad + self.std * e[1]
+
+
+class Compass:
+    """Heading counter-clockwise from world x [rad], wrapped to [-π, π)."""
+
+    def __init__(self, std_rad: float) -> None:
+        self.std = std_rad
+
+    def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> float:
+        h = truth.yaw_rad + self.std * rng.standard_normal()
+        return (h + math.pi) % (2 * math.pi) - math.pi
+
+
+class SensorSuite:
+    """All onboard sensors of a vehicle, producing one :class:`SensorFrame` per step.
+
+    Parameters
+    ----------
+    counts_per_rad : float
+        Encoder resolution [counts/rad].
+    noise : SensorNoise
+        Noise levels.
+    beacons : object | None
+        Optional exteroceptive scanner with ``scan(t_s, x_m, y_m, yaw_rad, rng) -> (bearings,
+        times)`` (``slipenv.sensors.beacons.BeaconScanner``).
+    """
+
+    def __init__(self, counts_per_rad: float, noise: SensorNoise, beacons=None) -> None:
+        self.encoders = WheelEncoders(noise.counts_per_rad or counts_per_rad)
+        self.torque = TorqueSensors(noise.torque_rel_std, noise.torque_scale)
+        self.imu = Imu(noise)
+        self.inclinometer = Inclinometer(noise.incl_std_rad)
+        self.compass = Compass(noise.compass_std_rad)
+        self.beacons = beacons
+
+    def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> SensorFrame:
+        """Read every sensor once (in a fixed order, so the random stream is reproducible)."""
+        enc = self.encoders.measure(truth, rng)
+        torque = self.torque.measure(truth, rng)
+        ax, ay, gz = self.imu.measure(truth, rng)
+        roll, pitch = self.inclinometer.measure(truth, rng)
+        heading = self.compass.measure(truth, rng)
+        bearings, times = np.zeros(0), np.zeros(0)
+        if self.beacons is not None:
+            x, y, _ = truth.position_m
+            bearings, times = self.beacons.scan(truth.t_s, x, y, truth.yaw_rad, rng)
+        return SensorFrame(
+            t_s=truth.t_s, enc_counts=enc, wheel_torque_nm=torque, gyro_z_rad_s=gz,
+            acc_x_mps2=ax, acc_y_mps2=ay, roll_rad=roll, pitch_rad=pitch, heading_rad=heading,
+            beacon_bearings_rad=bearings, beacon_times_s=times,
+        )

@@ -1,0 +1,288 @@
+"""The physics layer: one PyBullet client holding a terrain and a vehicle with soil forces.
+
+``Simulator`` knows nothing of sensors, estimators, paths or rewards. It takes channel
+speed commands, advances ``substeps`` physics steps (injecting the force law before each),
+and reports :class:`VehicleTruth`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet as p
+
+from slipenv.sim.wheel_soil import WheelSoilInjector
+from slipenv.terrain.terrain import TerrainSpec, build_terrain
+from slipenv.terramechanics.models import ForceModel
+from slipenv.terramechanics.soil_map import SoilMap
+from slipenv.vehicles.body import build_vehicle, spawn_height_m
+from slipenv.vehicles.spec import VehicleSpec
+
+GRAVITY_MPS2 = 9.81
+
+
+@dataclass(frozen=True)
+class VehicleTruth:
+    """Ground truth after a control step (world frame: x east, y north, z up; REP 103).
+
+    Attributes
+    ----------
+    t_s : float
+        Simulation time [s].
+    position_m : tuple[float, float, float]
+        Reference point (wheel-centre plane, midway between the contact lines) [m].
+    yaw_rad, pitch_rad, roll_rad : float
+        Z-Y-X Euler angles of the chassis [rad] (pitch > 0 nose down, roll > 0 left up).
+    velocity_body_mps : tuple[float, float, float]
+        Velocity of the reference point in the body frame [m/s].
+    yaw_rate_rad_s : float
+        Angular rate about body z [rad/s].
+    specific_force_body_mps2 : tuple[float, float, float]
+        Acceleration minus gravity in the body frame (what an accelerometer reads) [m/s^2].
+    channel_angle_rad : np.ndarray
+        Cumulative true wheel rotation of each drive channel [rad].
+    channel_torque_nm : np.ndarray
+        Mean motor torque per channel over the step, summed over the channel's wheels [N m].
+    """
+
+    t_s: float
+    position_m: tuple[float, float, float]
+    yaw_rad: float
+    pitch_rad: float
+    roll_rad: float
+    velocity_body_mps: tuple[float, float, float]
+    yaw_rate_rad_s: float
+    specific_force_body_mps2: tuple[float, float, float]
+    channel_angle_rad: np.ndarray
+    channel_torque_nm: np.ndarray
+
+    @property
+    def slip_angle_rad(self) -> float:
+        """Body slip angle atan2(v_y, v_x) [rad] (0 when standing)."""
+        vx, vy, _ = self.velocity_body_mps
+        return math.atan2(vy, vx) if math.hypot(vx, vy) > 1e-3 else 0.0
+
+
+class PhysicsBlowUp(RuntimeError):
+    """The physics produced a non-finite or absurd state."""
+
+
+class Simulator:
+    """A terrain and a vehicle in one PyBullet client, with the soil force law injected.
+
+    Parameters
+    ----------
+    vehicle : VehicleSpec
+    terrain : TerrainSpec
+    force_model : ForceModel
+    soil_map : SoilMap
+    physics_hz : float
+        Physics substep rate [Hz].
+    control_hz : float
+        Control (env step) rate [Hz]; must divide ``physics_hz``.
+    gui : bool
+        Open the PyBullet GUI (``render_mode="human"``).
+    inject : bool
+        Whether to apply the soil forces (``False`` gives the bare world used by the benchmark).
+    """
+
+    def __init__(
+        self,
+        vehicle: VehicleSpec,
+        terrain: TerrainSpec,
+        force_model: ForceModel,
+        soil_map: SoilMap,
+        physics_hz: float = 240.0,
+        control_hz: float = 20.0,
+        gui: bool = False,
+        inject: bool = True,
+    ) -> None:
+        ratio = physics_hz / control_hz
+        if control_hz <= 0 or physics_hz <= 0 or abs(ratio - round(ratio)) > 1e-9:
+            raise ValueError(
+                f"physics_hz ({physics_hz}) must be a positive multiple of control_hz ({control_hz})"
+            )
+        self.spec = vehicle
+        self.substeps = int(round(ratio))
+        self.dt_s = 1.0 / physics_hz
+        self.control_dt_s = 1.0 / control_hz
+        self.client = p.connect(p.GUI if gui else p.DIRECT)
+        p.setGravity(0, 0, -GRAVITY_MPS2, physicsClientId=self.client)
+        p.setTimeStep(self.dt_s, physicsClientId=self.client)
+        self.terrain = build_terrain(terrain, self.client)
+        self.body = build_vehicle(vehicle, self.client, (0, 0, 1.0), (0, 0, 0, 1))
+        self.injector = WheelSoilInjector(
+            self.client, vehicle, self.body, self.terrain.body_id, force_model, soil_map, self.dt_s
+        )
+        self.inject = inject
+        self._channel_joints = [
+            [self.body.spin_joints[i] for i, w in enumerate(vehicle.wheels) if w.channel == c]
+            for c in vehicle.channels
+        ]
+        self._all_spin = [j for js in self._channel_joints for j in js]
+        self._steer = [j for j in self.body.steer_joints if j is not None]
+        self._steer_wheels = [i for i, j in enumerate(self.body.steer_joints) if j is not None]
+        self.t_s = 0.0
+
+    # -- episode ----------------------------------------------------------------------------
+    def reset(self, x_m: float, y_m: float, yaw_rad: float, settle_s: float = 0.5) -> VehicleTruth:
+        """Place the vehicle at (x, y, yaw) on the ground, brakes on, and let it settle."""
+        nrm = self.terrain.normal(x_m, y_m)
+        z = self.terrain.height(x_m, y_m) + spawn_height_m(self.spec) / nrm[2] + 0.002
+        quat = _orientation_on_ground(yaw_rad, nrm)
+        ref = self.body.base_to_reference_m
+        rot = p.getMatrixFromQuaternion(quat)
+        offset = [rot[3 * i] * ref[0] + rot[3 * i + 1] * ref[1] for i in range(3)]
+        p.resetBasePositionAndOrientation(
+            self.body.body_id, [x_m - offset[0], y_m - offset[1], z], quat,
+            physicsClientId=self.client,
+        )
+        p.resetBaseVelocity(self.body.body_id, [0, 0, 0], [0, 0, 0], physicsClientId=self.client)
+        for j in range(p.getNumJoints(self.body.body_id, physicsClientId=self.client)):
+            p.resetJointState(self.body.body_id, j, 0.0, 0.0, physicsClientId=self.client)
+        self.injector.reset()
+        self.t_s = 0.0
+        self._angle_offset = np.zeros(len(self.spec.channels))
+        self.command(np.zeros(len(self.spec.channels)), [0.0] * len(self.spec.wheels))
+        for _ in range(int(round(settle_s / self.dt_s))):
+            self._substep()
+        self.injector.read_mean_joint_torque()
+        self.injector.chassis_contact = False
+        self.t_s = 0.0
+        self._angle_offset = self._channel_angles()
+        self._prev_vel = None
+        return self.truth()
+
+    def command(self, channel_speed_rad_s, steer_rad) -> None:
+        """Set the motor targets: speed per channel [rad/s], steering per wheel [rad]."""
+        speeds = [
+            float(s) for s, js in zip(channel_speed_rad_s, self._channel_joints) for _ in js
+        ]
+        p.setJointMotorControlArray(
+            self.body.body_id, self._all_spin, p.VELOCITY_CONTROL, targetVelocities=speeds,
+            forces=[self.spec.max_wheel_torque_nm] * len(speeds), physicsClientId=self.client,
+        )
+        if self._steer:
+            p.setJointMotorControlArray(
+                self.body.body_id, self._steer, p.POSITION_CONTROL,
+                targetPositions=[float(steer_rad[i]) for i in self._steer_wheels],
+                forces=[50.0 * self.spec.max_wheel_torque_nm] * len(self._steer),
+                physicsClientId=self.client,
+            )
+
+    def step(self, channel_speed_rad_s, steer_rad) -> VehicleTruth:
+        """One control step: command, run the substeps, return the truth.
+
+        Raises
+        ------
+        PhysicsBlowUp
+            If the state becomes non-finite or absurd (|v| > 100 m/s).
+        """
+        self.command(channel_speed_rad_s, steer_rad)
+        if self.inject:
+            self.injector.sample_soil()
+        for _ in range(self.substeps):
+            self._substep()
+        truth = self.truth()
+        vx, vy, vz = truth.velocity_body_mps
+        values = (*truth.position_m, vx, vy, vz, truth.yaw_rate_rad_s)
+        if not all(math.isfinite(v) for v in values) or math.sqrt(vx * vx + vy * vy) > 100.0:
+            raise PhysicsBlowUp(f"non-finite or absurd vehicle state at t = {self.t_s:.3f} s")
+        return truth
+
+    def _substep(self) -> None:
+        if self.inject:
+            self.injector.apply()
+        p.stepSimulation(physicsClientId=self.client)
+        self.t_s += self.dt_s
+
+    # -- truth ------------------------------------------------------------------------------
+    def _channel_angles(self) -> np.ndarray:
+        states = p.getJointStates(self.body.body_id, self._all_spin, physicsClientId=self.client)
+        out, i = [], 0
+        for js in self._channel_joints:
+            out.append(sum(states[i + k][0] for k in range(len(js))) / len(js))
+            i += len(js)
+        return np.array(out)
+
+    def truth(self) -> VehicleTruth:
+        """Ground truth now (accelerations from the velocity change over the last step)."""
+        cid, bid = self.client, self.body.body_id
+        pos, quat = p.getBasePositionAndOrientation(bid, physicsClientId=cid)
+        lin, ang = p.getBaseVelocity(bid, physicsClientId=cid)
+        rot = p.getMatrixFromQuaternion(quat)
+        r = [rot[0:3], rot[3:6], rot[6:9]]  # rows: world components of body axes as columns
+        ref = self.body.base_to_reference_m
+        ref_w = [sum(r[i][j] * ref[j] for j in range(3)) for i in range(3)]
+        position = tuple(pos[i] + ref_w[i] for i in range(3))
+        # Velocity of the reference point: v + ω × r_ref.
+        v_ref = (
+            lin[0] + ang[1] * ref_w[2] - ang[2] * ref_w[1],
+            lin[1] + ang[2] * ref_w[0] - ang[0] * ref_w[2],
+            lin[2] + ang[0] * ref_w[1] - ang[1] * ref_w[0],
+        )
+        to_body = lambda v: tuple(sum(r[i][j] * v[i] for i in range(3)) for j in range(3))  # noqa: E731
+        v_body = to_body(v_ref)
+        yaw_rate = to_body(ang)[2]
+        if self._prev_vel is None:
+            acc = (0.0, 0.0, 0.0)
+        else:
+            acc = tuple((v_ref[i] - self._prev_vel[i]) / self.control_dt_s for i in range(3))
+        self._prev_vel = v_ref
+        specific = to_body((acc[0], acc[1], acc[2] + GRAVITY_MPS2))
+        roll, pitch, yaw = p.getEulerFromQuaternion(quat)
+        torques = self.injector.read_mean_joint_torque()
+        channel_torque, i = [], 0
+        for js in self._channel_joints:
+            channel_torque.append(sum(torques[i:i + len(js)]))
+            i += len(js)
+        return VehicleTruth(
+            t_s=self.t_s,
+            position_m=position,
+            yaw_rad=yaw,
+            pitch_rad=pitch,
+            roll_rad=roll,
+            velocity_body_mps=v_body,
+            yaw_rate_rad_s=yaw_rate,
+            specific_force_body_mps2=specific,
+            channel_angle_rad=self._channel_angles() - self._angle_offset,
+            channel_torque_nm=np.array(channel_torque),
+        )
+
+    def close(self) -> None:
+        """Disconnect the PyBullet client (idempotent)."""
+        if self.client is not None and p.isConnected(self.client):
+            p.disconnect(self.client)
+        self.client = None
+
+
+def _orientation_on_ground(yaw_rad: float, normal) -> tuple[float, float, float, float]:
+    """Quaternion with body z along the ground normal and body x at heading ``yaw``."""
+    nx, ny, nz = normal
+    hx, hy = math.cos(yaw_rad), math.sin(yaw_rad)
+    # Project the heading onto the ground plane.
+    dot = hx * nx + hy * ny
+    fx, fy, fz = hx - dot * nx, hy - dot * ny, -dot * nz
+    inv = 1.0 / math.sqrt(fx * fx + fy * fy + fz * fz)
+    fx, fy, fz = fx * inv, fy * inv, fz * inv
+    lx, ly, lz = ny * fz - nz * fy, nz * fx - nx * fz, nx * fy - ny * fx
+    m = np.array([[fx, lx, nx], [fy, ly, ny], [fz, lz, nz]])
+    return _quat_from_matrix(m)
+
+
+def _quat_from_matrix(m: np.ndarray) -> tuple[float, float, float, float]:
+    tr = m[0, 0] + m[1, 1] + m[2, 2]
+    if tr > 0:
+        s = math.sqrt(tr + 1.0) * 2
+        return ((m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, 0.25 * s)
+    i = int(np.argmax(np.diag(m)))
+    j, k = (i + 1) % 3, (i + 2) % 3
+    s = math.sqrt(1.0 + m[i, i] - m[j, j] - m[k, k]) * 2
+    q = [0.0, 0.0, 0.0, 0.0]
+    q[i] = 0.25 * s
+    q[j] = (m[j, i] + m[i, j]) / s
+    q[k] = (m[k, i] + m[i, k]) / s
+    q[3] = (m[k, j] - m[j, k]) / s
+    return tuple(q)

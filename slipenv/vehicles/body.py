@@ -1,0 +1,168 @@
+"""Build a vehicle's PyBullet body from its :class:`VehicleSpec`.
+
+Wheels collide as spheres: a sphere touches the ground at one point straight below its
+centre, which is where the terramechanic force belongs, and sphere contacts stay smooth on
+heightfields where cylinder edges chatter. The visual shape is a cylinder. Every contact
+friction coefficient is set to zero so that PyBullet carries only normal contact and rigid-body
+motion and the injected force law carries traction and side force (DESIGN §3).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import pybullet as p
+import pybullet_data
+
+from slipenv.vehicles.spec import VehicleSpec
+
+_CYLINDER_ALONG_Y = (math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4))
+
+
+@dataclass
+class VehicleBody:
+    """Handles of a vehicle in one PyBullet client.
+
+    Attributes
+    ----------
+    body_id : int
+        Multibody id.
+    wheel_links : list[int]
+        Link index of each wheel, in ``spec.wheels`` order.
+    spin_joints : list[int | None]
+        Spin joint of each wheel (``None`` for castors).
+    steer_joints : list[int | None]
+        Steering joint of each wheel (``None`` if not steered).
+    base_to_reference_m : tuple[float, float, float]
+        Position of the chassis reference point (wheel-centre plane, midway between the
+        contact lines) in the base frame [m].
+    """
+
+    body_id: int
+    wheel_links: list[int]
+    spin_joints: list[int | None]
+    steer_joints: list[int | None]
+    base_to_reference_m: tuple[float, float, float]
+
+
+def spawn_height_m(spec: VehicleSpec) -> float:
+    """Height of the base origin above flat ground when the wheels just touch it [m]."""
+    if spec.urdf is not None:
+        return max(w.radius_m for w in spec.wheels) - 0.07828
+    return max(w.radius_m - w.position_m[2] for w in spec.wheels) + spec.chassis_center_height_m
+
+
+def build_vehicle(
+    spec: VehicleSpec,
+    client: int,
+    position: tuple[float, float, float],
+    orientation: tuple[float, float, float, float],
+) -> VehicleBody:
+    """Create the vehicle in ``client`` with its base at ``position``/``orientation``."""
+    if spec.urdf is not None:
+        body = _load_urdf(spec, client, position, orientation)
+    else:
+        body = _create_multibody(spec, client, position, orientation)
+    links = [-1, *range(p.getNumJoints(body.body_id, physicsClientId=client))]
+    for link in links:
+        p.changeDynamics(
+            body.body_id, link, lateralFriction=0.0, spinningFriction=0.0, rollingFriction=0.0,
+            linearDamping=0.0, angularDamping=0.0, physicsClientId=client,
+        )
+    # Compliant wheel-ground contact: stiffness from the static sinkage under an equal share of
+    # the weight, damping at 0.7 of critical for that share (see VehicleSpec.contact_sinkage_m).
+    share_kg = spec.mass_kg / len(spec.wheels)
+    stiffness = share_kg * 9.81 / spec.contact_sinkage_m
+    damping = 2.0 * 0.7 * math.sqrt(stiffness * share_kg)
+    for link in body.wheel_links:
+        p.changeDynamics(body.body_id, link, contactStiffness=stiffness, contactDamping=damping,
+                         physicsClientId=client)
+    for joint in body.spin_joints + body.steer_joints:
+        if joint is not None:
+            p.changeDynamics(body.body_id, joint, jointDamping=0.0, physicsClientId=client)
+    return body
+
+
+def _load_urdf(spec, client, position, orientation) -> VehicleBody:
+    p.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=client)
+    body_id = p.loadURDF(spec.urdf, position, orientation, physicsClientId=client)
+    names = {
+        p.getJointInfo(body_id, j, physicsClientId=client)[1].decode(): j
+        for j in range(p.getNumJoints(body_id, physicsClientId=client))
+    }
+    missing = [n for n in spec.urdf_wheel_joints if n not in names]
+    if missing:
+        raise ValueError(f"URDF {spec.urdf!r} has no joints {missing}")
+    joints = [names[n] for n in spec.urdf_wheel_joints]
+    # husky.urdf: wheel centres 0.0783 m above base_footprint, midway at x = 0.0875 m.
+    return VehicleBody(body_id, joints, list(joints), [None] * len(joints), (0.0875, 0.0, 0.07828))
+
+
+def _create_multibody(spec, client, position, orientation) -> VehicleBody:
+    lx, ly, lz = spec.chassis_size_m
+    base_col = p.createCollisionShape(
+        p.GEOM_BOX, halfExtents=[lx / 2, ly / 2, lz / 2], physicsClientId=client
+    )
+    base_vis = p.createVisualShape(
+        p.GEOM_BOX, halfExtents=[lx / 2, ly / 2, lz / 2], rgbaColor=[0.8, 0.55, 0.2, 1],
+        physicsClientId=client,
+    )
+    masses, cols, viss, poss, parents, types, axes = [], [], [], [], [], [], []
+    wheel_links, spin_joints, steer_joints = [], [], []
+    h = spec.chassis_center_height_m
+    for wheel in spec.wheels:
+        x, y, z = wheel.position_m
+        col = p.createCollisionShape(p.GEOM_SPHERE, radius=wheel.radius_m, physicsClientId=client)
+        vis = p.createVisualShape(
+            p.GEOM_CYLINDER, radius=wheel.radius_m, length=wheel.width_m,
+            visualFrameOrientation=_CYLINDER_ALONG_Y, rgbaColor=[0.15, 0.15, 0.15, 1],
+            physicsClientId=client,
+        )
+        parent = 0
+        offset = [x, y, z - h]
+        if wheel.steered:
+            masses.append(0.05)
+            cols.append(-1)
+            viss.append(-1)
+            poss.append(offset)
+            parents.append(0)
+            types.append(p.JOINT_REVOLUTE)
+            axes.append([0, 0, 1])
+            steer_joints.append(len(masses) - 1)
+            parent, offset = len(masses), [0.0, 0.0, 0.0]
+        else:
+            steer_joints.append(None)
+        masses.append(wheel.mass_kg)
+        cols.append(col)
+        viss.append(vis)
+        poss.append(offset)
+        parents.append(parent)
+        if wheel.role == "caster":
+            types.append(p.JOINT_FIXED)
+            spin_joints.append(None)
+        else:
+            types.append(p.JOINT_REVOLUTE)
+            spin_joints.append(len(masses) - 1)
+        axes.append([0, 1, 0])
+        wheel_links.append(len(masses) - 1)
+    n = len(masses)
+    body_id = p.createMultiBody(
+        baseMass=spec.chassis_mass_kg,
+        baseCollisionShapeIndex=base_col,
+        baseVisualShapeIndex=base_vis,
+        basePosition=position,
+        baseOrientation=orientation,
+        linkMasses=masses,
+        linkCollisionShapeIndices=cols,
+        linkVisualShapeIndices=viss,
+        linkPositions=poss,
+        linkOrientations=[[0, 0, 0, 1]] * n,
+        linkInertialFramePositions=[[0, 0, 0]] * n,
+        linkInertialFrameOrientations=[[0, 0, 0, 1]] * n,
+        linkParentIndices=parents,
+        linkJointTypes=types,
+        linkJointAxis=axes,
+        physicsClientId=client,
+    )
+    return VehicleBody(body_id, wheel_links, spin_joints, steer_joints, (0.0, 0.0, -h))

@@ -1,0 +1,174 @@
+"""The four vehicles of slipenv, with the source of every number.
+
+Values the papers leave out are listed in each spec's ``assumed`` field and commented here.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+from slipenv.vehicles.spec import VehicleSpec, WheelSpec
+
+
+def farm_2wd() -> VehicleSpec:
+    """Lindgren's agricultural vehicle: two independently driven front wheels, passive rear.
+
+    Lindgren §2.1-2.2: hydrostatic drive of each front wheel, 285 counts/rad encoders, effective
+    rolling radius 0.275 m on concrete and 0.283 / 0.287 m (left / right) on soil (§3.2). The
+    vehicle spans one 2 m crop bed; mass, track width and wheelbase are not given and assumed.
+    """
+    r = 0.275
+    track = 1.6  # assumed: spans a 2 m bed with the wheels in the furrows
+    front_x = 0.75  # assumed: 1.5 m wheelbase
+    wheels = (
+        WheelSpec("front_left", (front_x, track / 2, 0.0), r, 0.25, 20.0, "left",
+                  contact_length_m=0.18, soil_rolling_radius_m=0.283),
+        WheelSpec("front_right", (front_x, -track / 2, 0.0), r, 0.25, 20.0, "right",
+                  contact_length_m=0.18, soil_rolling_radius_m=0.287),
+        # Passive rear support modelled as castors (Lindgren: "passive"; type assumed).
+        WheelSpec("rear_left", (-front_x, track / 2, -0.125), 0.15, 0.12, 5.0, None,
+                  role="caster", contact_length_m=0.08),
+        WheelSpec("rear_right", (-front_x, -track / 2, -0.125), 0.15, 0.12, 5.0, None,
+                  role="caster", contact_length_m=0.08),
+    )
+    return VehicleSpec(
+        name="farm_2wd",
+        kind="diff_drive",
+        chassis_mass_kg=450.0,  # assumed: a light petrol-engined gantry vehicle
+        chassis_size_m=(2.0, 1.8, 0.4),
+        chassis_center_height_m=0.45,
+        wheels=wheels,
+        channels=("left", "right"),
+        track_width_m=track,
+        wheel_radius_nominal_m=r,
+        max_wheel_speed_rad_s=6.0,
+        max_wheel_torque_nm=900.0,  # assumed: hydrostatic drive, ample for 15° slopes
+        max_speed_mps=1.2,
+        max_yaw_rate_rad_s=0.8,
+        counts_per_rad=285.0,
+        assumed=("chassis_mass_kg", "track_width_m", "wheel positions", "rear castors",
+                 "max_wheel_torque_nm"),
+    )
+
+
+def tracked_patako(road_wheels_per_side: int = 5) -> VehicleSpec:
+    """Yamauchi's skid-steer tracked vehicle (Table 1): tread 0.41 m, tracks 0.60 × 0.11 m.
+
+    Each track is ``road_wheels_per_side`` road wheels that share one sprocket speed (one drive
+    channel), each carrying an equal share of the track's ground contact length. Body
+    503 × 686 × 522 mm (Table 1). The mass in Table 1 is illegible in our copy: assumed.
+    """
+    tread, length, width = 0.41, 0.60, 0.11
+    r = 0.06  # assumed road-wheel / sprocket radius
+    share = length / road_wheels_per_side
+    xs = [-length / 2 + share * (i + 0.5) for i in range(road_wheels_per_side)]
+    wheels = tuple(
+        WheelSpec(f"{side}_{i}", (x, y, 0.0), r, width, 0.4, side, contact_length_m=share)
+        for side, y in (("left", tread / 2), ("right", -tread / 2))
+        for i, x in enumerate(xs)
+    )
+    return VehicleSpec(
+        name="tracked_patako",
+        kind="skid_steer",
+        chassis_mass_kg=26.0,  # assumed (Table 1 mass unreadable)
+        chassis_size_m=(0.503, 0.30, 0.30),
+        chassis_center_height_m=0.17,
+        wheels=wheels,
+        channels=("left", "right"),
+        track_width_m=tread,
+        wheel_radius_nominal_m=r,
+        max_wheel_speed_rad_s=8.0,
+        max_wheel_torque_nm=15.0,
+        max_speed_mps=0.3,
+        max_yaw_rate_rad_s=math.radians(45.0),
+        counts_per_rad=285.0,
+        assumed=("chassis_mass_kg", "road wheel radius", "road_wheels_per_side"),
+    )
+
+
+def rover_4ws() -> VehicleSpec:
+    """Reina's El-Dorado-like 4WD/4WS rover: about 6.6 kg load per wheel (Reina §3).
+
+    Wheel radius, wheelbase and track are not given for El-Dorado and are assumed for a ~0.6 m
+    rover with 0.18 m wheels (inside the 5-25 cm range of Reina's single-wheel test bed).
+    """
+    r, half_l, half_w = 0.09, 0.30, 0.25
+    wheels = tuple(
+        WheelSpec(name, (x, y, 0.0), r, 0.08, 0.5, name, contact_length_m=0.05, steered=True)
+        for name, x, y in (
+            ("front_left", half_l, half_w),
+            ("front_right", half_l, -half_w),
+            ("rear_left", -half_l, half_w),
+            ("rear_right", -half_l, -half_w),
+        )
+    )
+    return VehicleSpec(
+        name="rover_4ws",
+        kind="rover4ws",
+        chassis_mass_kg=24.4,  # 4 × 6.6 kg wheel load (Reina §3) minus the wheels
+        chassis_size_m=(0.7, 0.4, 0.2),
+        chassis_center_height_m=0.15,
+        wheels=wheels,
+        channels=tuple(w.name for w in wheels),
+        track_width_m=2 * half_w,
+        wheel_radius_nominal_m=r,
+        max_wheel_speed_rad_s=4.0,
+        max_wheel_torque_nm=8.0,
+        max_speed_mps=0.3,
+        max_yaw_rate_rad_s=0.6,
+        counts_per_rad=285.0,
+        wheelbase_m=2 * half_l,
+        assumed=("wheel radius", "wheelbase_m", "track_width_m", "max_wheel_torque_nm"),
+    )
+
+
+def husky() -> VehicleSpec:
+    """Clearpath Husky A200 from ``pybullet_data`` (``husky/husky.urdf``), skid-steer.
+
+    Geometry as in the URDF: wheel radius 0.1651 m, wheel centres at x = +0.343 / -0.169 m,
+    y = ±0.285 m relative to the chassis joint; 50 kg in total. Each side is one channel.
+    """
+    r = 0.1651
+    wheels = (
+        WheelSpec("front_left", (0.256, 0.2854, 0.0), r, 0.1143, 2.637, "left"),
+        WheelSpec("front_right", (0.256, -0.2854, 0.0), r, 0.1143, 2.637, "right"),
+        WheelSpec("rear_left", (-0.256, 0.2854, 0.0), r, 0.1143, 2.637, "left"),
+        WheelSpec("rear_right", (-0.256, -0.2854, 0.0), r, 0.1143, 2.637, "right"),
+    )
+    return VehicleSpec(
+        name="husky",
+        kind="skid_steer",
+        chassis_mass_kg=39.5,
+        chassis_size_m=(1.0, 0.57, 0.27),
+        chassis_center_height_m=0.1,
+        wheels=wheels,
+        channels=("left", "right"),
+        track_width_m=0.5708,
+        wheel_radius_nominal_m=r,
+        max_wheel_speed_rad_s=6.0,
+        max_wheel_torque_nm=30.0,
+        max_speed_mps=1.0,
+        max_yaw_rate_rad_s=1.5,
+        counts_per_rad=285.0,
+        urdf="husky/husky.urdf",
+        urdf_wheel_joints=("front_left_wheel", "front_right_wheel",
+                           "rear_left_wheel", "rear_right_wheel"),
+        assumed=("max_wheel_torque_nm", "counts_per_rad"),
+    )
+
+
+VEHICLES: dict[str, Callable[[], VehicleSpec]] = {
+    "farm_2wd": farm_2wd,
+    "tracked_patako": tracked_patako,
+    "rover_4ws": rover_4ws,
+    "husky": husky,
+}
+
+
+def vehicle_by_name(name: str) -> VehicleSpec:
+    """Return the preset called ``name``; an unknown name is a ``ValueError`` listing them."""
+    try:
+        return VEHICLES[name]()
+    except KeyError:
+        raise ValueError(f"unknown vehicle {name!r}; known vehicles: {sorted(VEHICLES)}") from None

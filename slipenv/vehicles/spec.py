@@ -1,0 +1,214 @@
+"""Vehicle specifications: frozen dataclasses in SI units, validated on construction.
+
+A vehicle is a rigid chassis plus wheels. Wheels that share one commanded speed and one
+encoder form a *drive channel* (one wheel of a differential-drive vehicle, one track of a
+skid-steer vehicle whose road wheels all turn with the sprocket, one side of the Husky). The
+channel is what the action commands and what the encoders and torque sensors report.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+VEHICLE_KINDS = ("diff_drive", "skid_steer", "rover4ws")
+WHEEL_ROLES = ("driven", "caster")
+
+
+def _check_positive(owner: str, **values: float) -> None:
+    for name, value in values.items():
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
+            raise ValueError(f"{owner}.{name} must be a finite number > 0, got {value!r}")
+
+
+@dataclass(frozen=True)
+class WheelSpec:
+    """One wheel (or one road wheel of a track).
+
+    Attributes
+    ----------
+    name : str
+        Unique name, e.g. ``"front_left"``.
+    position_m : tuple[float, float, float]
+        Wheel centre in the chassis frame (x forward, y left, z up) [m].
+    radius_m : float
+        Rolling radius on rigid ground; also the collision sphere radius [m].
+    width_m : float
+        Tyre or track width [m] (contact patch width in the force law).
+    mass_kg : float
+        Wheel mass [kg].
+    channel : str | None
+        Drive channel the wheel belongs to (``None`` for casters).
+    role : str
+        ``"driven"`` (revolute spin joint with a speed-controlled motor) or ``"caster"`` (passive
+        support that only resists motion: rolling resistance, no traction or side force).
+    contact_length_m : float
+        Length of the contact patch along the travel direction [m] (a track's share of its
+        ground contact length for road wheels).
+    steered : bool
+        Whether a steering joint sits between chassis and wheel (4WS rover).
+    soil_rolling_radius_m : float | None
+        Effective rolling radius on deformable soil when it is known per wheel (Lindgren §3.2:
+        0.283 / 0.287 m on soil against 0.275 m on concrete); ``None`` uses
+        ``radius_m * soil.rolling_radius_scale``.
+    """
+
+    name: str
+    position_m: tuple[float, float, float]
+    radius_m: float
+    width_m: float
+    mass_kg: float
+    channel: str | None
+    role: str = "driven"
+    contact_length_m: float = 0.1
+    steered: bool = False
+    soil_rolling_radius_m: float | None = None
+
+    def __post_init__(self) -> None:
+        owner = f"WheelSpec({self.name!r})"
+        _check_positive(
+            owner,
+            radius_m=self.radius_m,
+            width_m=self.width_m,
+            mass_kg=self.mass_kg,
+            contact_length_m=self.contact_length_m,
+        )
+        if self.role not in WHEEL_ROLES:
+            raise ValueError(f"{owner}.role must be one of {WHEEL_ROLES}, got {self.role!r}")
+        if self.role == "driven" and self.channel is None:
+            raise ValueError(f"{owner}: a driven wheel needs a drive channel")
+        if len(self.position_m) != 3 or not all(math.isfinite(v) for v in self.position_m):
+            raise ValueError(f"{owner}.position_m must be three finite numbers")
+        if self.soil_rolling_radius_m is not None:
+            _check_positive(owner, soil_rolling_radius_m=self.soil_rolling_radius_m)
+
+
+@dataclass(frozen=True)
+class VehicleSpec:
+    """A whole vehicle.
+
+    Attributes
+    ----------
+    name : str
+        Preset name.
+    kind : str
+        ``diff_drive`` | ``skid_steer`` | ``rover4ws`` (the log-format vehicle kinds).
+    chassis_mass_kg : float
+        Chassis mass without wheels [kg].
+    chassis_size_m : tuple[float, float, float]
+        Chassis box length, width, height [m].
+    chassis_center_height_m : float
+        Height of the chassis box centre above the wheel-centre plane [m].
+    wheels : tuple[WheelSpec, ...]
+        All wheels, left side first within each axle.
+    channels : tuple[str, ...]
+        Drive channel names, left side first (encoders and torque sensors report per channel).
+    track_width_m : float
+        Lateral distance between the left and right contact lines [m].
+    wheel_radius_nominal_m : float
+        The radius the operator believes in for odometry (calibrated on concrete) [m].
+    max_wheel_speed_rad_s : float
+        Motor speed limit [rad/s].
+    max_wheel_torque_nm : float
+        Motor torque limit per wheel [N m] (brakes hold up to the same torque).
+    max_speed_mps : float
+        Forward speed at action +1 [m/s].
+    max_yaw_rate_rad_s : float
+        Yaw rate at action +1 [rad/s].
+    counts_per_rad : float
+        Encoder resolution [counts/rad] (Lindgren: 285).
+    wheelbase_m : float | None
+        Front-rear axle distance for ``rover4ws`` [m].
+    urdf : str | None
+        A ``pybullet_data`` URDF to load instead of building the body from the spec (Husky);
+        its wheel joints are matched by ``urdf_wheel_joints``.
+    urdf_wheel_joints : tuple[str, ...]
+        Joint names of the URDF wheels in the order of ``wheels``.
+    contact_sinkage_m : float
+        Static sinkage of the compliant wheel-ground contact under the vehicle's own weight [m].
+        Soil is not rigid: the compliance spreads the load over a track's road wheels (a rigid
+        contact leaves them statically indeterminate, with two or three carrying everything).
+    assumed : tuple[str, ...]
+        Fields whose values the source paper leaves out and that are assumed here.
+    """
+
+    name: str
+    kind: str
+    chassis_mass_kg: float
+    chassis_size_m: tuple[float, float, float]
+    chassis_center_height_m: float
+    wheels: tuple[WheelSpec, ...]
+    channels: tuple[str, ...]
+    track_width_m: float
+    wheel_radius_nominal_m: float
+    max_wheel_speed_rad_s: float
+    max_wheel_torque_nm: float
+    max_speed_mps: float
+    max_yaw_rate_rad_s: float
+    counts_per_rad: float = 285.0
+    wheelbase_m: float | None = None
+    urdf: str | None = None
+    urdf_wheel_joints: tuple[str, ...] = ()
+    contact_sinkage_m: float = 0.003
+    assumed: tuple[str, ...] = field(default_factory=tuple)
+
+    def __post_init__(self) -> None:
+        owner = f"VehicleSpec({self.name!r})"
+        if self.kind not in VEHICLE_KINDS:
+            raise ValueError(f"{owner}.kind must be one of {VEHICLE_KINDS}, got {self.kind!r}")
+        _check_positive(
+            owner,
+            chassis_mass_kg=self.chassis_mass_kg,
+            track_width_m=self.track_width_m,
+            wheel_radius_nominal_m=self.wheel_radius_nominal_m,
+            max_wheel_speed_rad_s=self.max_wheel_speed_rad_s,
+            max_wheel_torque_nm=self.max_wheel_torque_nm,
+            max_speed_mps=self.max_speed_mps,
+            max_yaw_rate_rad_s=self.max_yaw_rate_rad_s,
+            counts_per_rad=self.counts_per_rad,
+            contact_sinkage_m=self.contact_sinkage_m,
+        )
+        _check_positive(owner, **dict(zip(("length", "width", "height"), self.chassis_size_m)))
+        names = [w.name for w in self.wheels]
+        if len(set(names)) != len(names):
+            raise ValueError(f"{owner}: wheel names must be unique, got {names}")
+        for wheel in self.wheels:
+            if wheel.channel is not None and wheel.channel not in self.channels:
+                raise ValueError(
+                    f"{owner}: wheel {wheel.name!r} names unknown channel {wheel.channel!r}; "
+                    f"channels are {self.channels}"
+                )
+        empty = [c for c in self.channels if not any(w.channel == c for w in self.wheels)]
+        if empty:
+            raise ValueError(f"{owner}: channels without wheels: {empty}")
+        if self.kind == "rover4ws" and self.wheelbase_m is None:
+            raise ValueError(f"{owner}: a rover4ws vehicle needs wheelbase_m")
+        if self.urdf is not None and len(self.urdf_wheel_joints) != len(self.wheels):
+            raise ValueError(f"{owner}: urdf_wheel_joints must name one joint per wheel")
+
+    @property
+    def mass_kg(self) -> float:
+        """Total mass, chassis plus wheels [kg]."""
+        return self.chassis_mass_kg + sum(w.mass_kg for w in self.wheels)
+
+    @property
+    def left_channels(self) -> tuple[int, ...]:
+        """Indices of channels whose wheels sit on the left (y > 0)."""
+        return tuple(i for i, c in enumerate(self.channels) if self._channel_y(c) > 0.0)
+
+    @property
+    def right_channels(self) -> tuple[int, ...]:
+        """Indices of channels whose wheels sit on the right (y < 0)."""
+        return tuple(i for i, c in enumerate(self.channels) if self._channel_y(c) < 0.0)
+
+    def _channel_y(self, channel: str) -> float:
+        ys = [w.position_m[1] for w in self.wheels if w.channel == channel]
+        return sum(ys) / len(ys)
+
+    def channel_xy_m(self) -> list[tuple[float, float]]:
+        """Mean (x, y) of each channel's wheels in the chassis frame [m]."""
+        out = []
+        for channel in self.channels:
+            ws = [w for w in self.wheels if w.channel == channel]
+            out.append((sum(w.position_m[0] for w in ws) / len(ws), self._channel_y(channel)))
+        return out
