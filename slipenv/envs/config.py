@@ -85,7 +85,9 @@ class SlipEnvConfig:
         elif isinstance(self.terrain, dict):
             object.__setattr__(self, "terrain", _build(TerrainSpec, self.terrain, "terrain"))
         elif not isinstance(self.terrain, TerrainSpec):
-            raise ValueError(f"terrain must be a TerrainSpec, dict or kind name, got {self.terrain!r}")
+            raise ValueError(
+                f"terrain must be a TerrainSpec, dict or kind name, got {self.terrain!r}"
+            )
         if isinstance(self.sensor_noise, dict):
             object.__setattr__(
                 self, "sensor_noise", _build(SensorNoise, self.sensor_noise, "sensor_noise")

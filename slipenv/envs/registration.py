@@ -47,7 +47,7 @@ PRESETS: dict[str, dict] = {
         max_episode_s=90.0, max_cross_track_m=1.0,
     ),
     "slipenv/HuskySand-v0": dict(
-        vehicle="husky", terrain="flat", soil="loose_sand", force_model="reina",
+        vehicle="husky", terrain="flat", soil="loose_sand", force_model="janosi",
         path="s_curve", path_kwargs={"length_m": 10.0, "offset_m": 2.0, "speed_mps": 0.6},
         max_episode_s=40.0,
     ),

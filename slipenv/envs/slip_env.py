@@ -26,7 +26,6 @@ from slipenv.sim.simulator import PhysicsBlowUp, Simulator, VehicleTruth
 from slipenv.vehicles.kinematics import twist_to_commands
 
 
-
 class SlipEnv(gym.Env):
     """Path following on deformable soil with slip-aware odometry.
 

@@ -17,7 +17,7 @@ from slipenv.sim.wheel_soil import WheelSoilInjector
 from slipenv.terrain.terrain import TerrainSpec, build_terrain
 from slipenv.terramechanics.models import ForceModel
 from slipenv.terramechanics.soil_map import SoilMap
-from slipenv.vehicles.body import build_vehicle, spawn_height_m
+from slipenv.vehicles.body import build_vehicle
 from slipenv.vehicles.spec import VehicleSpec
 
 GRAVITY_MPS2 = 9.81
@@ -102,7 +102,8 @@ class Simulator:
         ratio = physics_hz / control_hz
         if control_hz <= 0 or physics_hz <= 0 or abs(ratio - round(ratio)) > 1e-9:
             raise ValueError(
-                f"physics_hz ({physics_hz}) must be a positive multiple of control_hz ({control_hz})"
+                f"physics_hz ({physics_hz}) must be a positive multiple of control_hz "
+                f"({control_hz})"
             )
         self.spec = vehicle
         self.substeps = int(round(ratio))
@@ -130,13 +131,17 @@ class Simulator:
     def reset(self, x_m: float, y_m: float, yaw_rad: float, settle_s: float = 0.5) -> VehicleTruth:
         """Place the vehicle at (x, y, yaw) on the ground, brakes on, and let it settle."""
         nrm = self.terrain.normal(x_m, y_m)
-        z = self.terrain.height(x_m, y_m) + spawn_height_m(self.spec) / nrm[2] + 0.002
         quat = _orientation_on_ground(yaw_rad, nrm)
+        # The reference point lies in the driven wheels' centre plane: one rolling radius
+        # above the ground along its normal (plus 2 mm so the wheels drop onto it).
+        lift = self.body.contact_radius_m + 0.002
+        target = [x_m + nrm[0] * lift, y_m + nrm[1] * lift,
+                  self.terrain.height(x_m, y_m) + nrm[2] * lift]
         ref = self.body.base_to_reference_m
         rot = p.getMatrixFromQuaternion(quat)
-        offset = [rot[3 * i] * ref[0] + rot[3 * i + 1] * ref[1] for i in range(3)]
+        offset = [sum(rot[3 * i + j] * ref[j] for j in range(3)) for i in range(3)]
         p.resetBasePositionAndOrientation(
-            self.body.body_id, [x_m - offset[0], y_m - offset[1], z], quat,
+            self.body.body_id, [target[i] - offset[i] for i in range(3)], quat,
             physicsClientId=self.client,
         )
         p.resetBaseVelocity(self.body.body_id, [0, 0, 0], [0, 0, 0], physicsClientId=self.client)
@@ -157,9 +162,8 @@ class Simulator:
 
     def command(self, channel_speed_rad_s, steer_rad) -> None:
         """Set the motor targets: speed per channel [rad/s], steering per wheel [rad]."""
-        speeds = [
-            float(s) for s, js in zip(channel_speed_rad_s, self._channel_joints) for _ in js
-        ]
+        pairs = zip(channel_speed_rad_s, self._channel_joints, strict=True)
+        speeds = [float(s) for s, js in pairs for _ in js]
         p.setJointMotorControlArray(
             self.body.body_id, self._all_spin, p.VELOCITY_CONTROL, targetVelocities=speeds,
             forces=[self.spec.max_wheel_torque_nm] * len(speeds), physicsClientId=self.client,
@@ -233,11 +237,9 @@ class Simulator:
         self._prev_vel = v_ref
         specific = to_body((acc[0], acc[1], acc[2] + GRAVITY_MPS2))
         roll, pitch, yaw = p.getEulerFromQuaternion(quat)
-        torques = self.injector.read_mean_joint_torque()
-        channel_torque, i = [], 0
-        for js in self._channel_joints:
-            channel_torque.append(sum(torques[i:i + len(js)]))
-            i += len(js)
+        by_joint = dict(zip(self.injector.spin_joints, self.injector.read_mean_joint_torque(),
+                            strict=True))
+        channel_torque = [sum(by_joint[j] for j in js) for js in self._channel_joints]
         return VehicleTruth(
             t_s=self.t_s,
             position_m=position,

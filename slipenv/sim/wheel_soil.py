@@ -33,7 +33,7 @@ import numpy as np
 import pybullet as p
 
 from slipenv.terramechanics.models import ForceModel
-from slipenv.terramechanics.soil_map import SoilMap
+from slipenv.terramechanics.soil_map import SoilMap, UniformSoil
 from slipenv.vehicles.body import VehicleBody
 from slipenv.vehicles.spec import VehicleSpec
 
@@ -77,8 +77,13 @@ class WheelSoilInjector:
     min_relaxation_m : float
         Lower bound of the slip relaxation length σ [m].
     resistance_speed_mps : float
-        Speed scale of the smooth sign applied to motion resistance [m/s] (resistance opposes
+        Below this speed the motion resistance ramps linearly to zero [m/s] (resistance opposes
         motion and vanishes at standstill: it is not static friction).
+    low_speed_mps : float
+        Below this speed a critically damped soil term fades in [m/s] (Pacejka §7.2: the
+        relaxation model alone is an undamped spring at standstill, and its speed-dependent
+        leak ratchets an oscillating parked vehicle downhill). Zero at and above this speed,
+        so it never alters driving forces.
     """
 
     def __init__(
@@ -92,6 +97,7 @@ class WheelSoilInjector:
         dt_s: float,
         min_relaxation_m: float = 0.01,
         resistance_speed_mps: float = 0.02,
+        low_speed_mps: float = 0.02,
     ) -> None:
         self.client = client
         self.body_id = body.body_id
@@ -101,7 +107,10 @@ class WheelSoilInjector:
         self.soil_map = soil_map
         self.dt_s = dt_s
         self.min_relaxation_m = min_relaxation_m
-        self.eps_v2 = resistance_speed_mps**2
+        self.inv_resistance_speed = 1.0 / resistance_speed_mps
+        self.inv_low_speed = 1.0 / low_speed_mps
+        wheels_on_ground = len(spec.wheels)
+        self.mass_share_kg = spec.mass_kg / wheels_on_ground
         self.n = len(spec.wheels)
         self.links = list(body.wheel_links)
         self.link_to_wheel = {link: k for k, link in enumerate(self.links)}
@@ -130,7 +139,7 @@ class WheelSoilInjector:
     # -- soil ------------------------------------------------------------------------------
     def sample_soil(self, force: bool = False) -> None:
         """Sample the soil under every wheel (called once per control step)."""
-        uniform = getattr(self.soil_map, "is_uniform", False)
+        uniform = isinstance(self.soil_map, UniformSoil)
         if uniform and not force:
             return
         if uniform:
@@ -148,6 +157,29 @@ class WheelSoilInjector:
         self._h = [self.dt_s / max(float(sp.shear_modulus_m), self.min_relaxation_m)
                    for sp in per_wheel]
         self._r_eff = [self._rolling_radius_m(sp, k) for k, sp in enumerate(per_wheel)]
+        self._damping = [self._critical_damping(k) for k in range(self.n)]
+
+    def _critical_damping(self, k: int) -> tuple[float, float]:
+        """Low-speed damping (c_long, c_lat) [N s/m] of wheel ``k``: critical for the soil spring.
+
+        The spring is the slip state at standstill: stiffness C/σ with C = dF/ds at s = 0 of the
+        force law at the wheel's static load share (finite difference). Capped at the explicit
+        stability limit m/dt.
+        """
+        if not self.driven[k]:
+            return 0.0, 0.0
+        load = np.array([self.mass_share_kg * 9.81])
+        eps = np.array([1e-3])
+        zero = np.zeros(1)
+        soil = self._soil_rows[k]
+        fx, _ = self.force_model(eps, zero, load, soil)
+        _, fy = self.force_model(zero, eps, load, soil)
+        sigma = self.dt_s / self._h[k]
+        out = []
+        for stiffness in (abs(float(fx[0])) / 1e-3, abs(float(fy[0])) / 1e-3):
+            c = 2.0 * math.sqrt(stiffness / sigma * self.mass_share_kg)
+            out.append(min(c, self.mass_share_kg / self.dt_s))
+        return out[0], out[1]
 
     def _rolling_radius_m(self, soil_params, k: int) -> float:
         if bool(soil_params.deformable) and self.soil_radius[k] is not None:
@@ -207,45 +239,68 @@ class WheelSoilInjector:
             lx, ly, lz = ny * fz_ - nz * fy_, nz * fx_ - nx * fz_, nx * fy_ - ny * fx_
             vx, vy, vz = links[k][6]
             v_long = vx * fx_ + vy * fy_ + vz * fz_
-            frames[k] = (fx_, fy_, fz_, lx, ly, lz, v_long)
             if self.driven[k]:
-                v_lat = vx * lx + vy * ly + vz * lz
+                # Lateral slip is the sliding of the contact point, not of the wheel centre:
+                # add ω × (contact - centre), which removes the chassis roll (rate × radius)
+                # that would otherwise feed back into the side force.
+                w = load[k]
+                px, py, pz = links[k][0]
+                rx, ry, rz = a[0] / w - px, a[1] / w - py, a[2] / w - pz
+                wx, wy, wz = links[k][7]
+                v_lat = ((vx + wy * rz - wz * ry) * lx + (vy + wz * rx - wx * rz) * ly
+                         + (vz + wx * ry - wy * rx) * lz)
                 hk = h[k]
                 r_omega = r_eff[k] * joints[self.spin_index[k]][1]
+                frames[k] = (fx_, fy_, fz_, lx, ly, lz, v_long, v_lat, r_omega)
                 v_ref = max(abs(r_omega), abs(v_long))
                 s = (slip[k] + hk * (r_omega - v_long)) / (1.0 + hk * v_ref)
                 slip[k] = 1.0 if s > 1.0 else (-1.0 if s < -1.0 else s)
                 v_ref_y = max(abs(v_long), abs(v_lat))
                 t = (tanb[k] + hk * v_lat) / (1.0 + hk * v_ref_y)
                 tanb[k] = 1.0 if t > 1.0 else (-1.0 if t < -1.0 else t)
+            else:
+                frames[k] = (fx_, fy_, fz_, lx, ly, lz, v_long, 0.0, 0.0)
 
         fx, fy, res = self._forces(slip, tanb, load)
         self.load, self.fx, self.fy, self.res = load, fx, fy, res
-        eps2 = self.eps_v2
+        inv_eps = self.inv_resistance_speed
+        inv_low, damping = self.inv_low_speed, self._damping
+        links_k, wheel_states = self.links, links
         for k in range(n):
             fr = frames[k]
             if fr is None:
                 continue
             v_long = fr[6]
-            r_k = res[k] * v_long / math.sqrt(v_long * v_long + eps2)
+            # Resistance opposes travel; a linear ramp below resistance_speed_mps keeps it
+            # continuous (and explicit-stable) through zero and exact above it.
+            ramp = v_long * inv_eps
+            r_k = res[k] * (1.0 if ramp > 1.0 else (-1.0 if ramp < -1.0 else ramp))
+            fw0, fw1, fw2, la0, la1, la2 = fr[0], fr[1], fr[2], fr[3], fr[4], fr[5]
             if self.driven[k]:
-                f_long, f_lat = fx[k] - r_k, fy[k]
-            else:
-                f_long, f_lat = -r_k, 0.0  # a castor swivels: no side force, no traction
-            w = load[k]
-            a = acc[k]
-            p.applyExternalForce(
-                bid,
-                self.links[k],
-                (
-                    f_long * fr[0] + f_lat * fr[3],
-                    f_long * fr[1] + f_lat * fr[4],
-                    f_long * fr[2] + f_lat * fr[5],
-                ),
-                (a[0] / w, a[1] / w, a[2] / w),
-                p.WORLD_FRAME,
-                physicsClientId=cid,
-            )
+                f_long, f_lat = fx[k], fy[k]
+                r_omega, v_lat = fr[8], fr[7]
+                speed = max(abs(v_long), abs(r_omega), abs(v_lat)) * inv_low
+                if speed < 1.0:
+                    c_long, c_lat = damping[k]
+                    fade = 1.0 - speed
+                    f_long += fade * c_long * (r_omega - v_long)
+                    f_lat -= fade * c_lat * v_lat
+                w = load[k]
+                a = acc[k]
+                # Shear (traction, side force) acts at the contact patch: the motor feels r F.
+                p.applyExternalForce(
+                    bid, links_k[k],
+                    (f_long * fw0 + f_lat * la0, f_long * fw1 + f_lat * la1,
+                     f_long * fw2 + f_lat * la2),
+                    (a[0] / w, a[1] / w, a[2] / w), p.WORLD_FRAME, physicsClientId=cid,
+                )
+            if r_k != 0.0:
+                # Compaction resistance comes from normal stresses that point at the axle: it
+                # acts through the wheel centre and puts no moment on the wheel.
+                p.applyExternalForce(
+                    bid, links_k[k], (-r_k * fw0, -r_k * fw1, -r_k * fw2),
+                    wheel_states[k][0], p.WORLD_FRAME, physicsClientId=cid,
+                )
 
     def _forces(self, slip, tanb, load) -> tuple[list, list, list]:
         scalar = self._scalar

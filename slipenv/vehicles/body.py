@@ -9,7 +9,11 @@ motion and the injected force law carries traction and side force (DESIGN §3).
 
 from __future__ import annotations
 
+import hashlib
 import math
+import os
+import re
+import tempfile
 from dataclasses import dataclass
 
 import pybullet as p
@@ -37,6 +41,8 @@ class VehicleBody:
     base_to_reference_m : tuple[float, float, float]
         Position of the chassis reference point (wheel-centre plane, midway between the
         contact lines) in the base frame [m].
+    contact_radius_m : float
+        Collision radius of the driven wheels: height of the wheel centres above the ground [m].
     """
 
     body_id: int
@@ -44,13 +50,7 @@ class VehicleBody:
     spin_joints: list[int | None]
     steer_joints: list[int | None]
     base_to_reference_m: tuple[float, float, float]
-
-
-def spawn_height_m(spec: VehicleSpec) -> float:
-    """Height of the base origin above flat ground when the wheels just touch it [m]."""
-    if spec.urdf is not None:
-        return max(w.radius_m for w in spec.wheels) - 0.07828
-    return max(w.radius_m - w.position_m[2] for w in spec.wheels) + spec.chassis_center_height_m
+    contact_radius_m: float
 
 
 def build_vehicle(
@@ -84,9 +84,38 @@ def build_vehicle(
     return body
 
 
+def sphere_wheel_urdf(spec: VehicleSpec) -> str:
+    """Path of a copy of ``spec.urdf`` whose wheels collide as spheres of ``radius_m``.
+
+    The ``pybullet_data`` URDF wheels are cylinders; PyBullet gives them a contact manifold
+    spread over the tread (up to a few cm behind the axle) whose normal forces put a
+    fluctuating moment on the wheel, like a tyre rolling on a flat. A sphere touches the
+    ground once, under the axle, as the force law assumes. Meshes, masses and inertias are
+    the original's (mesh paths made absolute). The copy is written once to a cache folder.
+    """
+    source = os.path.join(pybullet_data.getDataPath(), spec.urdf)
+    folder = os.path.dirname(source)
+    with open(source) as fh:
+        text = fh.read()
+    radius = spec.wheels[0].radius_m
+    text = re.sub(r'<cylinder length="[0-9.]+" radius="[0-9.]+"\s*/>',
+                  f'<sphere radius="{radius}"/>', text)
+    text = text.replace('filename="meshes/', f'filename="{folder}/meshes/')
+    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
+    cache = os.path.join(tempfile.gettempdir(), "slipenv_urdf")
+    os.makedirs(cache, exist_ok=True)
+    path = os.path.join(cache, f"{os.path.basename(spec.urdf)[:-5]}_{digest}.urdf")
+    if not os.path.exists(path):
+        tmp = f"{path}.{os.getpid()}"
+        with open(tmp, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)  # atomic: parallel test workers may race here
+    return path
+
+
 def _load_urdf(spec, client, position, orientation) -> VehicleBody:
-    p.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=client)
-    body_id = p.loadURDF(spec.urdf, position, orientation, physicsClientId=client)
+    body_id = p.loadURDF(sphere_wheel_urdf(spec), position, orientation,
+                         physicsClientId=client)
     names = {
         p.getJointInfo(body_id, j, physicsClientId=client)[1].decode(): j
         for j in range(p.getNumJoints(body_id, physicsClientId=client))
@@ -96,7 +125,8 @@ def _load_urdf(spec, client, position, orientation) -> VehicleBody:
         raise ValueError(f"URDF {spec.urdf!r} has no joints {missing}")
     joints = [names[n] for n in spec.urdf_wheel_joints]
     # husky.urdf: wheel centres 0.0783 m above base_footprint, midway at x = 0.0875 m.
-    return VehicleBody(body_id, joints, list(joints), [None] * len(joints), (0.0875, 0.0, 0.07828))
+    return VehicleBody(body_id, joints, list(joints), [None] * len(joints),
+                       (0.0875, 0.0, 0.07828), spec.wheels[0].radius_m)
 
 
 def _create_multibody(spec, client, position, orientation) -> VehicleBody:
@@ -165,4 +195,10 @@ def _create_multibody(spec, client, position, orientation) -> VehicleBody:
         linkJointAxis=axes,
         physicsClientId=client,
     )
-    return VehicleBody(body_id, wheel_links, spin_joints, steer_joints, (0.0, 0.0, -h))
+    # Reference point: midway between the driven contact lines, in the wheel-centre plane (the
+    # log-format's reference; for a 2WD vehicle with castors, the driven-axle midpoint).
+    driven = [w for w in spec.wheels if w.role == "driven"]
+    ref = tuple(sum(w.position_m[i] for w in driven) / len(driven) for i in range(3))
+    return VehicleBody(body_id, wheel_links, spin_joints, steer_joints,
+                       (ref[0], ref[1], ref[2] - h),
+                       sum(w.radius_m for w in driven) / len(driven))

@@ -149,7 +149,7 @@ class VehicleSpec:
     wheelbase_m: float | None = None
     urdf: str | None = None
     urdf_wheel_joints: tuple[str, ...] = ()
-    contact_sinkage_m: float = 0.003
+    contact_sinkage_m: float = 0.001
     assumed: tuple[str, ...] = field(default_factory=tuple)
 
     def __post_init__(self) -> None:
@@ -168,7 +168,8 @@ class VehicleSpec:
             counts_per_rad=self.counts_per_rad,
             contact_sinkage_m=self.contact_sinkage_m,
         )
-        _check_positive(owner, **dict(zip(("length", "width", "height"), self.chassis_size_m)))
+        size = dict(zip(("length", "width", "height"), self.chassis_size_m, strict=True))
+        _check_positive(owner, **{f"chassis_{k}_m": v for k, v in size.items()})
         names = [w.name for w in self.wheels]
         if len(set(names)) != len(names):
             raise ValueError(f"{owner}: wheel names must be unique, got {names}")

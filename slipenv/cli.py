@@ -1,0 +1,100 @@
+"""The ``slipenv`` command line.
+
+``slipenv run ENV_ID``    a baseline controller drives one episode: table + trajectory plot.
+``slipenv bench``         env steps/s next to bare ``stepSimulation`` of the same world.
+``slipenv list``          registered environment ids.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+import gymnasium as gym
+
+import slipenv  # noqa: F401  (registers the envs)
+
+
+def _env_ids() -> list[str]:
+    return sorted(e for e in gym.registry if e.startswith("slipenv/"))
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from slipenv.run import format_table, plot_episode, run_episode, summarize
+
+    if args.env_id not in gym.registry:
+        print(f"unknown env id {args.env_id!r}; registered: {', '.join(_env_ids())}",
+              file=sys.stderr)
+        return 2
+    rec = run_episode(args.env_id, seed=args.seed, controller=args.controller,
+                      max_steps=args.max_steps, progress=not args.quiet)
+    stats = summarize(rec)
+    print(format_table(stats, f"{args.env_id}  seed {args.seed}  controller {args.controller}"
+                              f"  ({rec.end_reason})"))
+    out_dir = args.out or f"runs/{args.env_id.split('/')[-1]}"
+    png = plot_episode(rec, f"{out_dir}/trajectory.png")
+    print(f"trajectory plot: {png}")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({"env_id": args.env_id, "seed": args.seed, "metrics": stats,
+                       "end_reason": rec.end_reason}, fh, indent=2)
+        print(f"metrics: {args.json}")
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from slipenv.bench import format_bench, run_bench
+
+    ids = args.env_ids or _env_ids()
+    result = run_bench(ids, steps=args.steps, repeats=args.repeats, progress=not args.quiet)
+    print(format_bench(result))
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(result, fh, indent=2)
+        print(f"written: {args.json}")
+    return 0
+
+
+def cmd_list(args: argparse.Namespace) -> int:
+    for env_id in _env_ids():
+        print(env_id)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="slipenv", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="drive one episode with the baseline controller")
+    run.add_argument("env_id", help="e.g. slipenv/HuskySand-v0 (see `slipenv list`)")
+    run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--controller", default="yamauchi",
+                     help="yamauchi (default), yamauchi_feedback, pure_pursuit, stanley")
+    run.add_argument("--max-steps", type=int, default=None)
+    run.add_argument("--out", default=None, help="output folder (default runs/<env>)")
+    run.add_argument("--json", default=None, help="also write the metrics as JSON")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.set_defaults(func=cmd_run)
+    bench = sub.add_parser("bench", help="env steps/s next to bare stepSimulation")
+    bench.add_argument("env_ids", nargs="*", help="default: every registered id")
+    bench.add_argument("--json", default=None, help="write the figures as JSON")
+    bench.add_argument("--steps", type=int, default=200, help="env steps per measurement")
+    bench.add_argument("--repeats", type=int, default=5, help="interleaved repetitions")
+    bench.add_argument("--quiet", action="store_true")
+    bench.set_defaults(func=cmd_bench)
+    sub.add_parser("list", help="registered env ids").set_defaults(func=cmd_list)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except ValueError as exc:
+        print(f"slipenv: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

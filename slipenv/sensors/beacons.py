@@ -1,0 +1,168 @@
+"""Rotating laser scanner that measures bearings to surveyed retro-reflective beacons.
+
+Lindgren §2.4: a scanner on the vehicle turns at 3.6 scans/s and reports the bearing, relative
+to the body x axis, of each of 15 surveyed beacons it sweeps past ("not all simultaneously
+visible", about 30 bearings per second in total), with variance 1e-4 rad². Bearings are not
+identified: which beacon produced a bearing is for the estimator to decide (Lindgren Eq. 17 and
+its nearest-innovation association).
+
+Model. The scanner head points at body angle ``ψ(t) = ψ0 + 2π f t``. A beacon at body bearing
+``φ(t)`` is hit when ``ψ(t) - φ(t)`` passes a multiple of 2π; the hit is reported if the beacon
+is within ``max_range_m`` and inside the field of view ``|φ| <= fov_rad / 2`` (the rear sector
+is hidden by the vehicle). Between two calls the vehicle pose is interpolated linearly, so each
+bearing is computed from the pose at its own time stamp. Optional clutter adds spurious
+bearings (Poisson, uniform over the field of view) to exercise the estimator's gating.
+
+The default layout (:func:`default_beacons_xy`) is an assumption: the paper gives the number of
+beacons, not where they stood. Fifteen beacons 8 m apart around the edge of a 30 m × 30 m field
+centred on the origin; with a 25 m range and a 240° field of view, a vehicle within 8 m of the
+centre sees 6-12 of them, about 34 bearings per second on average.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+FIELD_HALF_SIZE_M = 15.0  # half the side of the default square field [m] (assumed)
+
+
+def default_beacons_xy() -> np.ndarray:
+    """The default 15-beacon layout: 8 m apart along the edge of a 30 m square field.
+
+    Returns
+    -------
+    np.ndarray, shape (15, 2)
+        Beacon positions [m], starting 2 m from the south-west corner, counter-clockwise.
+    """
+    side = 2.0 * FIELD_HALF_SIZE_M
+    perimeter = 4.0 * side
+    h = FIELD_HALF_SIZE_M
+    out = []
+    for s in np.arange(15) * perimeter / 15.0 + 2.0:
+        k, u = divmod(float(s) % perimeter, side)
+        out.append([(-h + u, -h), (h, -h + u), (h - u, h), (-h, h - u)][int(k)])
+    return np.array(out)
+
+
+class BeaconScanner:
+    """Rotating bearing-only beacon scanner (Lindgren §2.4).
+
+    Parameters
+    ----------
+    beacons_xy : np.ndarray, shape (m, 2), optional
+        Surveyed beacon positions [m]; :func:`default_beacons_xy` when None.
+    scan_rate_hz : float
+        Head revolutions per second [1/s] (Lindgren: 3.6).
+    bearing_var_rad2 : float
+        Bearing noise variance [rad²] (Lindgren: 1e-4).
+    max_range_m : float
+        Beacons farther than this are not seen [m] (assumed 25 m).
+    fov_rad : float
+        Field of view centred on body x [rad] (assumed 240°: the rear 120° is hidden).
+    clutter_rate_hz : float
+        Mean rate of spurious bearings [1/s] (0: none).
+    head_phase_rad : float
+        Head angle ψ0 at t = 0 [rad].
+
+    Notes
+    -----
+    Every random draw comes from the ``rng`` passed to :meth:`scan`.
+    """
+
+    def __init__(
+        self,
+        beacons_xy: np.ndarray | None = None,
+        scan_rate_hz: float = 3.6,
+        bearing_var_rad2: float = 1e-4,
+        max_range_m: float = 25.0,
+        fov_rad: float = math.radians(240.0),
+        clutter_rate_hz: float = 0.0,
+        head_phase_rad: float = 0.0,
+    ) -> None:
+        b = default_beacons_xy() if beacons_xy is None else np.asarray(beacons_xy, dtype=float)
+        if b.ndim != 2 or b.shape[1] != 2 or b.shape[0] == 0 or not np.all(np.isfinite(b)):
+            raise ValueError(f"beacons_xy must be a finite (m, 2) array, got shape {b.shape}")
+        for name, value in (("scan_rate_hz", scan_rate_hz), ("max_range_m", max_range_m),
+                            ("fov_rad", fov_rad)):
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"BeaconScanner.{name} must be finite and > 0, got {value!r}")
+        if not (bearing_var_rad2 >= 0.0 and clutter_rate_hz >= 0.0):
+            raise ValueError("bearing_var_rad2 and clutter_rate_hz must be >= 0")
+        self.beacons_xy = b
+        self.scan_rate_hz = float(scan_rate_hz)
+        self.bearing_var_rad2 = float(bearing_var_rad2)
+        self.max_range_m = float(max_range_m)
+        self.fov_rad = float(min(fov_rad, 2.0 * math.pi))
+        self.clutter_rate_hz = float(clutter_rate_hz)
+        self.head_phase_rad = float(head_phase_rad)
+        self._last: tuple[float, float, float, float] | None = None  # (t, x, y, yaw)
+
+    def reset(self, t_s: float, x_m: float, y_m: float, yaw_rad: float) -> None:
+        """Start a new episode at time ``t_s`` and pose (x, y, yaw); no bearings before it."""
+        self._last = (float(t_s), float(x_m), float(y_m), float(yaw_rad))
+
+    def _body_bearings(self, x: float, y: float, yaw: float) -> np.ndarray:
+        """Unwrapped bearing of each beacon from pose (x, y, yaw) [rad], shape (m,)."""
+        return np.arctan2(self.beacons_xy[:, 1] - y, self.beacons_xy[:, 0] - x) - yaw
+
+    def scan(
+        self, t_s: float, x_m: float, y_m: float, yaw_rad: float, rng: np.random.Generator
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Bearings the head swept past in (t_prev, t_s], with the vehicle now at (x, y, yaw).
+
+        Parameters
+        ----------
+        t_s : float
+            Current time [s]; must be after the previous call's.
+        x_m, y_m, yaw_rad : float
+            True vehicle pose now [m, m, rad]; the pose in between is interpolated from the
+            previous call.
+        rng : np.random.Generator
+            Source of all noise.
+
+        Returns
+        -------
+        bearings_rad : np.ndarray, shape (k,)
+            Noisy bearings relative to body x, wrapped to [-π, π) [rad], unidentified.
+        times_s : np.ndarray, shape (k,)
+            Time stamp of each bearing [s], increasing, in (t_prev, t_s].
+        """
+        if self._last is None:  # the first call starts the scanner
+            self.reset(t_s, x_m, y_m, yaw_rad)
+            return np.zeros(0), np.zeros(0)
+        t0, x0, y0, yaw0 = self._last
+        t1 = float(t_s)
+        if not t1 > t0:
+            raise ValueError(f"BeaconScanner.scan: t = {t1!r} s is not after {t0!r} s")
+        dyaw = (yaw_rad - yaw0 + math.pi) % (2.0 * math.pi) - math.pi
+        self._last = (t1, float(x_m), float(y_m), float(yaw_rad))
+        dt = t1 - t0
+        # g(t) = ψ(t) - φ(t), taken linear over the interval; hits where g = 2π m
+        phi0 = self._body_bearings(x0, y0, yaw0)
+        phi1 = self._body_bearings(float(x_m), float(y_m), yaw0 + dyaw)
+        dphi = (phi1 - phi0 + np.pi) % (2.0 * np.pi) - np.pi
+        g0 = self.head_phase_rad + 2.0 * math.pi * self.scan_rate_hz * t0 - phi0
+        dg = 2.0 * math.pi * self.scan_rate_hz * dt - dphi
+        m_lo = np.floor(g0 / (2.0 * np.pi)) + 1.0
+        m_hi = np.floor((g0 + dg) / (2.0 * np.pi))
+        n_hits = np.maximum(m_hi - m_lo + 1.0, 0.0).astype(int) * (dg > 0.0)
+        idx = np.repeat(np.arange(len(self.beacons_xy)), n_hits)
+        m = m_lo[idx] + (np.arange(len(idx)) - np.repeat(np.cumsum(n_hits) - n_hits, n_hits))
+        frac = np.clip((2.0 * np.pi * m - g0[idx]) / dg[idx], 0.0, 1.0)
+        times = np.maximum(t0 + frac * dt, np.nextafter(t0, math.inf))  # stay inside (t0, t1]
+        xs, ys = x0 + frac * (x_m - x0), y0 + frac * (y_m - y0)
+        yaws = yaw0 + frac * dyaw
+        dx, dy = self.beacons_xy[idx, 0] - xs, self.beacons_xy[idx, 1] - ys
+        bearing = (np.arctan2(dy, dx) - yaws + np.pi) % (2.0 * np.pi) - np.pi
+        seen = (np.hypot(dx, dy) <= self.max_range_m) & (np.abs(bearing) <= 0.5 * self.fov_rad)
+        bearing, times = bearing[seen], times[seen]
+        bearing = bearing + rng.normal(0.0, math.sqrt(self.bearing_var_rad2), bearing.shape)
+        if self.clutter_rate_hz > 0.0:
+            k = rng.poisson(self.clutter_rate_hz * dt)
+            bearing = np.concatenate([bearing, rng.uniform(-0.5, 0.5, k) * self.fov_rad])
+            times = np.concatenate([times, t0 + dt * (1.0 - rng.uniform(0.0, 1.0, k))])
+        order = np.argsort(times, kind="stable")
+        bearing = (bearing[order] + np.pi) % (2.0 * np.pi) - np.pi
+        return bearing, times[order]

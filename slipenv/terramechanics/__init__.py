@@ -1,0 +1,76 @@
+"""Wheel-soil force laws for slip-aware simulation: pure, vectorised numpy, no PyBullet.
+
+Modules
+-------
+soil, presets
+    `Soil` (validated, SI, sourced) and its numeric image `SoilParams`; the presets
+    (Reina's lunar simulant and loose sand, Lindgren's field loam, Toyoura-like sand, concrete).
+janosi, lindgren, reina, bekker
+    Plain force laws, each citing its paper and equation: Janosi-Hanamoto shear and Okello's
+    thrust curve (Lindgren Eq. 2-3, 18-24), the linear torque-slip law and the rolling-radius
+    error (Lindgren Eq. 24-31), Reina's combined slip (Reina Eq. 5-12), Bekker sinkage and
+    compaction resistance.
+contact, models
+    The slip/sign convention (in `contact`'s docstring, used everywhere), `ContactGeometry`,
+    and the `ForceModel` contract with its three implementations, called by the simulation at
+    every physics substep.
+soil_map
+    Soils varying over the ground: `UniformSoil`, `PatchSoilMap`, `GridSoilMap`.
+"""
+
+from slipenv.terramechanics.contact import ContactGeometry, slip_ratio
+from slipenv.terramechanics.models import (
+    FORCE_MODELS,
+    ForceModel,
+    JanosiForceModel,
+    LinearSlipForceModel,
+    ReinaForceModel,
+    force_model_by_name,
+)
+from slipenv.terramechanics.presets import (
+    CONCRETE,
+    FIELD_LOAM,
+    LOOSE_SAND,
+    LUNAR_SIMULANT,
+    SOILS,
+    TOYOURA_SAND,
+    soil_by_name,
+)
+from slipenv.terramechanics.soil import PARAM_FIELDS, Soil, SoilParams
+from slipenv.terramechanics.soil_map import (
+    Circle,
+    GridSoilMap,
+    PatchSoilMap,
+    Rectangle,
+    Region,
+    SoilMap,
+    UniformSoil,
+)
+
+__all__ = [
+    "CONCRETE",
+    "FIELD_LOAM",
+    "FORCE_MODELS",
+    "LOOSE_SAND",
+    "LUNAR_SIMULANT",
+    "PARAM_FIELDS",
+    "SOILS",
+    "TOYOURA_SAND",
+    "Circle",
+    "ContactGeometry",
+    "ForceModel",
+    "GridSoilMap",
+    "JanosiForceModel",
+    "LinearSlipForceModel",
+    "PatchSoilMap",
+    "ReinaForceModel",
+    "Rectangle",
+    "Region",
+    "Soil",
+    "SoilMap",
+    "SoilParams",
+    "UniformSoil",
+    "force_model_by_name",
+    "slip_ratio",
+    "soil_by_name",
+]

@@ -1,0 +1,115 @@
+"""Bekker sinkage and compaction resistance of rigid wheels and tracks.
+
+Bekker's pressure-sinkage law p = (k_c/b + k_phi) z^n gives, for a rigid wheel of diameter D and
+width b carrying W, the sinkage
+
+    z = (3 W / ((3 - n)(k_c + b k_phi) sqrt(D)))^(2/(2n+1)),
+
+for a track of contact length L, z = (W/(b L (k_c/b + k_phi)))^(1/n), and in both cases the work
+of pressing a rut of depth z per unit distance travelled, the compaction resistance
+
+    R_c = b (k_c/b + k_phi) z^(n+1)/(n+1)
+
+(standard Bekker theory; Wong, Theory of Ground Vehicles, Ch. 2 and 5). Both are power laws in
+the load, R_c = gamma W^e, which is how the force models evaluate them per physics substep.
+On non-deformable ground there is no rut and R_c = 0. All functions broadcast.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+__all__ = [
+    "wheel_sinkage_m",
+    "track_sinkage_m",
+    "compaction_resistance_n",
+    "wheel_compaction_law",
+    "track_compaction_law",
+]
+
+
+def _clamped_load(load_n: ArrayLike) -> np.ndarray:
+    return np.maximum(np.asarray(load_n, dtype=float), 0.0)
+
+
+def wheel_sinkage_m(load_n: ArrayLike, width_m: ArrayLike, diameter_m: ArrayLike,
+                    k_c: ArrayLike, k_phi: ArrayLike, n_exp: ArrayLike) -> np.ndarray:
+    """Static sinkage z [m] of a rigid wheel (Bekker; Wong Ch. 5).
+
+    Parameters
+    ----------
+    load_n : array_like
+        Wheel load W [N]; negative loads count as 0.
+    width_m, diameter_m : array_like
+        Wheel width b and diameter D [m].
+    k_c, k_phi, n_exp : array_like
+        Bekker moduli k_c [N/m^(n+1)], k_phi [N/m^(n+2)] and exponent n (0 < n < 3).
+    """
+    n = np.asarray(n_exp, dtype=float)
+    k_eq_b = np.asarray(k_c) + np.asarray(width_m) * k_phi
+    base = 3.0 * _clamped_load(load_n) / ((3.0 - n) * k_eq_b * np.sqrt(diameter_m))
+    return base ** (2.0 / (2.0 * n + 1.0))
+
+
+def track_sinkage_m(load_n: ArrayLike, width_m: ArrayLike, length_m: ArrayLike,
+                    k_c: ArrayLike, k_phi: ArrayLike, n_exp: ArrayLike) -> np.ndarray:
+    """Sinkage z [m] of a track (or track segment) under uniform pressure W/(b L) (Bekker).
+
+    Parameters
+    ----------
+    load_n : array_like
+        Load W [N] carried by the contact length L.
+    width_m, length_m : array_like
+        Track width b and contact length L [m].
+    k_c, k_phi, n_exp : array_like
+        Bekker moduli and exponent (n > 0).
+    """
+    width = np.asarray(width_m, dtype=float)
+    pressure = _clamped_load(load_n) / (width * length_m)
+    return (pressure / (np.asarray(k_c) / width + k_phi)) ** (1.0 / np.asarray(n_exp))
+
+
+def compaction_resistance_n(sinkage_m: ArrayLike, width_m: ArrayLike, k_c: ArrayLike,
+                            k_phi: ArrayLike, n_exp: ArrayLike) -> np.ndarray:
+    """Compaction resistance R_c = b (k_c/b + k_phi) z^(n+1)/(n+1) [N] (Bekker; Wong Ch. 5).
+
+    Parameters
+    ----------
+    sinkage_m : array_like
+        Rut depth z [m].
+    width_m : array_like
+        Width b [m] of the wheel or track.
+    k_c, k_phi, n_exp : array_like
+        Bekker moduli and exponent.
+    """
+    n1 = np.asarray(n_exp, dtype=float) + 1.0
+    k_eq_b = np.asarray(k_c) + np.asarray(width_m) * k_phi
+    return k_eq_b * np.asarray(sinkage_m) ** n1 / n1
+
+
+def wheel_compaction_law(width_m: float, diameter_m: float, k_c: ArrayLike, k_phi: ArrayLike,
+                         n_exp: ArrayLike,
+                         deformable: ArrayLike = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(gamma, e) with R_c = gamma W^e for a rigid wheel: the two formulas above combined.
+
+    e = (2n+2)/(2n+1); gamma is multiplied by `deformable` (1.0 soft, 0.0 rigid ground, or a
+    blend from a soil map) so that R_c = 0 on non-deformable ground.
+    """
+    n = np.asarray(n_exp, dtype=float)
+    k_eq_b = np.asarray(k_c) + width_m * np.asarray(k_phi)
+    alpha = 3.0 / ((3.0 - n) * k_eq_b * np.sqrt(diameter_m))
+    exponent = (2.0 * n + 2.0) / (2.0 * n + 1.0)
+    gamma = np.asarray(deformable) * k_eq_b / (n + 1.0) * alpha ** exponent
+    return gamma, exponent
+
+
+def track_compaction_law(width_m: float, length_m: float, k_c: ArrayLike, k_phi: ArrayLike,
+                         n_exp: ArrayLike,
+                         deformable: ArrayLike = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(gamma, e) with R_c = gamma W^e for a track carrying W over length L; e = (n+1)/n."""
+    n = np.asarray(n_exp, dtype=float)
+    k_eq_b = np.asarray(k_c) + width_m * np.asarray(k_phi)
+    exponent = (n + 1.0) / n
+    gamma = np.asarray(deformable) * k_eq_b / (n + 1.0) * (1.0 / (length_m * k_eq_b)) ** exponent
+    return gamma, exponent

@@ -1,0 +1,147 @@
+"""Janosi-Hanamoto shear, the Mohr-Coulomb limit, and the Okello thrust-slip curve.
+
+A contact patch of length L, width b (area A = bL) carrying load W on soil (c, phi, K): the soil
+under the patch at distance x behind its front edge has been sheared by j = s x (slip s), so its
+shear stress is q(x) = (c + p tan phi)(1 - e^{-sx/K}) (Lindgren Eq. 2-3, uniform pressure
+p = W/A). Integrating q over the patch gives the thrust
+
+    F(s) = (A c + W tan phi) [1 - (K/(sL)) (1 - e^{-sL/K})],
+
+which is Okello's curve C_T = A[1 - (B/s)(1 - e^{-s/B})] (Lindgren Eq. 18-20) with amplitude
+F_max = A c + W tan phi and shape B = K/L. All functions broadcast over numpy arrays.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+__all__ = [
+    "mohr_coulomb_strength_pa",
+    "janosi_shear_stress_pa",
+    "okello_secant",
+    "okello_traction",
+    "max_thrust_n",
+    "patch_thrust_n",
+    "small_slip_stiffness",
+]
+
+# Below this argument okello_secant switches from its closed form, which loses ~4 eps/x to
+# cancellation, to the clamped form plus its first-order Taylor correction (error < X^2/24).
+_X_SMALL = np.asarray(1e-5)
+_ONE = np.asarray(1.0)
+_SIXTH = np.asarray(1.0 / 6.0)
+
+
+def mohr_coulomb_strength_pa(normal_stress_pa: ArrayLike, cohesion_pa: ArrayLike,
+                             friction_angle_rad: ArrayLike) -> np.ndarray:
+    """Maximum soil shear strength q_max = c + sigma tan(phi) [Pa] (Lindgren Eq. 3).
+
+    Parameters
+    ----------
+    normal_stress_pa : array_like
+        Normal stress sigma [Pa].
+    cohesion_pa : array_like
+        Cohesion c [Pa].
+    friction_angle_rad : array_like
+        Internal friction angle phi [rad].
+    """
+    return np.asarray(cohesion_pa) + np.asarray(normal_stress_pa) * np.tan(friction_angle_rad)
+
+
+def janosi_shear_stress_pa(shear_displacement_m: ArrayLike, max_shear_stress_pa: ArrayLike,
+                           shear_modulus_m: ArrayLike) -> np.ndarray:
+    """Janosi-Hanamoto shear stress q = q_max (1 - e^{-j/K}) [Pa] (Lindgren Eq. 2).
+
+    Odd in j: a shear displacement in the opposite direction gives the opposite stress.
+
+    Parameters
+    ----------
+    shear_displacement_m : array_like
+        Shear displacement j [m].
+    max_shear_stress_pa : array_like
+        Mohr-Coulomb strength q_max [Pa] (`mohr_coulomb_strength_pa`).
+    shear_modulus_m : array_like
+        Shear deformation modulus K [m].
+    """
+    j = np.asarray(shear_displacement_m, dtype=float)
+    return -np.sign(j) * np.asarray(max_shear_stress_pa) * np.expm1(-np.abs(j) / shear_modulus_m)
+
+
+def okello_secant(x: ArrayLike) -> np.ndarray:
+    """Secant slope h(x) = g(x)/x = (x - 1 + e^{-x})/x^2 of Okello's normalised curve, x >= 0.
+
+    g(x) = 1 - (1 - e^{-x})/x is the bracket of Lindgren Eq. 18 at x = s/B, so the thrust is
+    F = F_max x h(x). h(0) = 1/2 (the limit of Lindgren Eq. 23); there is no 0/0 anywhere.
+    Relative error below 1e-10 for all x >= 0.
+    """
+    x = np.asarray(x, dtype=float)
+    xc = np.maximum(x, _X_SMALL)
+    h = (np.expm1(-xc) + xc) / (xc * xc)
+    h += (xc - x) * _SIXTH  # h'(0) = -1/6: first-order correction where x was clamped
+    return h
+
+
+def okello_traction(slip: ArrayLike, amplitude: ArrayLike, shape_b: ArrayLike) -> np.ndarray:
+    """Okello's traction curve C_T = A [1 - (B/s)(1 - e^{-s/B})] (Lindgren Eq. 18, 20).
+
+    Extended to braking as an odd function of s; finite at s = 0 (value 0, slope A/(2B)).
+
+    Parameters
+    ----------
+    slip : array_like
+        Slip ratio s [-].
+    amplitude : array_like
+        A: the value approached as s -> infinity (C_T in Eq. 18, T_max in Eq. 20, F_max here).
+    shape_b : array_like
+        B [-], > 0; for a patch of length L on soil of modulus K, B = K/L.
+    """
+    s = np.asarray(slip, dtype=float)
+    return np.asarray(amplitude) * (s / shape_b) * okello_secant(np.abs(s) / shape_b)
+
+
+def max_thrust_n(load_n: ArrayLike, area_m2: ArrayLike, cohesion_pa: ArrayLike,
+                 friction_angle_rad: ArrayLike) -> np.ndarray:
+    """Mohr-Coulomb thrust limit F_max = A c + W tan(phi) [N] of a contact patch.
+
+    Lindgren Eq. 3 integrated over a patch of area A [m^2] carrying load W [N].
+    """
+    return np.asarray(area_m2) * cohesion_pa + np.asarray(load_n) * np.tan(friction_angle_rad)
+
+
+def patch_thrust_n(slip: ArrayLike, load_n: ArrayLike, area_m2: ArrayLike,
+                   contact_length_m: ArrayLike, cohesion_pa: ArrayLike,
+                   friction_angle_rad: ArrayLike, shear_modulus_m: ArrayLike) -> np.ndarray:
+    """Thrust of a patch, F = (A c + W tan phi)[1 - (K/(sL))(1 - e^{-sL/K})] [N].
+
+    Janosi-Hanamoto shear (Lindgren Eq. 2) with Mohr-Coulomb strength (Eq. 3) integrated over
+    the patch: Okello's curve (Eq. 18-20) with B = K/L. Odd in s (braking pushes backwards).
+
+    Parameters
+    ----------
+    slip : array_like
+        Slip ratio s [-], > 0 in drive.
+    load_n : array_like
+        Normal load W [N].
+    area_m2 : array_like
+        Contact area A [m^2].
+    contact_length_m : array_like
+        Contact length L [m] over which the shear displacement builds up.
+    cohesion_pa, friction_angle_rad, shear_modulus_m : array_like
+        Soil c [Pa], phi [rad], K [m].
+    """
+    f_max = max_thrust_n(load_n, area_m2, cohesion_pa, friction_angle_rad)
+    return okello_traction(slip, f_max, np.asarray(shear_modulus_m) / contact_length_m)
+
+
+def small_slip_stiffness(max_value: ArrayLike, shape_b: ArrayLike) -> np.ndarray:
+    """Initial slope k = T_max/(2B) of Okello's curve (Lindgren Eq. 23-24).
+
+    Parameters
+    ----------
+    max_value : array_like
+        Amplitude of the curve: T_max [N m] gives k_s [N m], F_max [N] gives dF/ds [N].
+    shape_b : array_like
+        B = K/L [-].
+    """
+    return np.asarray(max_value) / (2.0 * np.asarray(shape_b))

@@ -1,0 +1,125 @@
+"""Reina's semi-empirical combined longitudinal/lateral wheel-soil model (Reina Eq. 5-12).
+
+Pure-slip reference curves (Eq. 5-6)
+
+    F_x0(s)      = W (mu (1 - e^{-C_x s/(mu W)}) - A_x s)
+    F_y0(tan b)  = W (mu (1 - e^{-C_y tan b/(mu W)}) - A_y tan b)
+
+are evaluated at the total slip sigma = sqrt(s^2 + tan^2 b) (Eq. 7) and split by direction,
+F_x = (s/sigma) F_x0(sigma), F_y = (tan b/sigma) F_y0(sigma) (Eq. 8-9). Table 3 (lunar
+simulant): mu = 0.6, C_x = 55 N, C_y = 200 N, A_x = 0.02, A_y = 0.04, fitted at W = 6.6 kg.
+
+Written as F_x = s k_x(sigma) with k_x = C_x (1 - e^{-y})/y - W A_x, y = C_x sigma/(mu W), the
+split has no 0/0 at sigma = 0. Sign convention of this package: F_x has the sign of s; F_y
+opposes lateral sliding, F_y = -(tan b/sigma) F_y0(sigma) (Reina's Eq. 9 gives its magnitude).
+Departure from the paper: k_x, k_y are floored at 0, so beyond sigma = mu/A (30 for Table 3,
+far outside the fitted 0-0.8 slip, 5-25 deg) the force stays at 0 instead of changing sign.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+__all__ = [
+    "exp_secant",
+    "reina_reference_force_n",
+    "reina_forces_n",
+    "reina_max_longitudinal_force_n",
+    "slip_ratio_from_slip_angle",
+]
+
+_TINY = np.asarray(1e-300)
+_TINY_LOAD_N = 1e-12  # [N] floor of W where it divides (zero load gives zero force)
+
+
+def exp_secant(y: ArrayLike) -> np.ndarray:
+    """(1 - e^{-y})/y for y >= 0, equal to 1 at y = 0 (exact to rounding, no 0/0)."""
+    yc = np.maximum(np.asarray(y, dtype=float), _TINY)
+    return -np.expm1(-yc) / yc
+
+
+def reina_reference_force_n(slip: ArrayLike, load_n: ArrayLike, mu: ArrayLike,
+                            stiffness_n: ArrayLike, high_slip_slope: ArrayLike) -> np.ndarray:
+    """Pure-slip reference force W (mu (1 - e^{-C s/(mu W)}) - A s) [N] (Reina Eq. 5-6).
+
+    Eq. 5 with (C_x, A_x) and the slip ratio s, or Eq. 6 with (C_y, A_y) and tan(beta). Reina
+    states it for s >= 0; here it is extended as an odd function of s.
+
+    Parameters
+    ----------
+    slip : array_like
+        s_x [-] (Eq. 5) or tan(beta) [-] (Eq. 6).
+    load_n : array_like
+        Vertical wheel load W [N], > 0.
+    mu : array_like
+        Maximum soil adhesion coefficient [-].
+    stiffness_n : array_like
+        C_x or C_y [N]: slope of the curve at zero slip.
+    high_slip_slope : array_like
+        A_x or A_y [-]: slope of the curve at high slip, in units of W.
+    """
+    s = np.asarray(slip, dtype=float)
+    w = np.asarray(load_n, dtype=float)
+    a = np.abs(s)
+    mu_w = np.asarray(mu) * w
+    return np.sign(s) * (-mu_w * np.expm1(-np.asarray(stiffness_n) * a / mu_w)
+                         - w * np.asarray(high_slip_slope) * a)
+
+
+def reina_forces_n(slip: ArrayLike, tan_beta: ArrayLike, load_n: ArrayLike, mu: ArrayLike,
+                   c_x_n: ArrayLike, c_y_n: ArrayLike, a_x: ArrayLike,
+                   a_y: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Combined-slip forces (F_x, F_y) [N] (Reina Eq. 7-9).
+
+    Parameters
+    ----------
+    slip : array_like
+        Slip ratio s [-] (Reina Eq. 3; > 0 in drive).
+    tan_beta : array_like
+        Tangent of the slip angle, v_lateral/|v_longitudinal| [-] (Reina Eq. 4).
+    load_n : array_like
+        Vertical load W [N]; W <= 0 gives (numerically) zero force.
+    mu, c_x_n, c_y_n, a_x, a_y : array_like
+        Reina Table 3 parameters: mu [-], C_x [N], C_y [N], A_x [-], A_y [-].
+
+    Returns
+    -------
+    fx_n, fy_n : ndarray
+        F_x with the sign of s; F_y opposing the lateral sliding, sign(F_y) = -sign(tan beta).
+        At tan beta = 0, F_x = F_x0(s) (Eq. 5); at s = 0, -F_y = F_y0(tan beta) (Eq. 6).
+    """
+    s = np.asarray(slip, dtype=float)
+    tb = np.asarray(tan_beta, dtype=float)
+    w = np.maximum(np.asarray(load_n, dtype=float), _TINY_LOAD_N)
+    sigma_per_mu_w = np.hypot(s, tb) / (np.asarray(mu) * w)
+    k_x = np.asarray(c_x_n) * exp_secant(c_x_n * sigma_per_mu_w) - w * a_x
+    k_y = np.asarray(c_y_n) * exp_secant(c_y_n * sigma_per_mu_w) - w * a_y
+    return s * np.maximum(k_x, 0.0), -tb * np.maximum(k_y, 0.0)
+
+
+def reina_max_longitudinal_force_n(tan_beta: ArrayLike, load_n: ArrayLike,
+                                   mu: ArrayLike) -> np.ndarray:
+    """Saturation of F_x as s -> 1, mu W / sqrt(1 + tan^2 beta) [N] (Reina Eq. 10, A_x ~ 0)."""
+    return np.asarray(mu) * np.asarray(load_n) / np.hypot(1.0, tan_beta)
+
+
+def slip_ratio_from_slip_angle(beta_rad: ArrayLike, s_x0: ArrayLike, beta0_rad: ArrayLike,
+                               slope_per_rad: ArrayLike) -> np.ndarray:
+    """Longitudinal slip needed at slip angle beta for a fixed tractive effort (Reina Eq. 12).
+
+    s_x = s_x0 for beta <= beta0, s_x0 + k (beta - beta0) above.
+
+    Parameters
+    ----------
+    beta_rad : array_like
+        Slip angle beta [rad].
+    s_x0 : array_like
+        Slip ratio without lateral drift [-].
+    beta0_rad : array_like
+        Slip angle where the slip ratio starts to rise [rad].
+    slope_per_rad : array_like
+        k [1/rad].
+    """
+    excess = np.maximum(np.asarray(beta_rad, dtype=float) - beta0_rad, 0.0)
+    return np.asarray(s_x0) + np.asarray(slope_per_rad) * excess
