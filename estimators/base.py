@@ -110,6 +110,7 @@ def check_frame_time(previous_t_s: float | None, frame: SensorFrame) -> float:
         raise ValueError(f"sensor frame time is not finite: {t!r}")
     if previous_t_s is not None and t <= previous_t_s:
         raise ValueError(
-            f"sensor frame out of order: t = {t:.6f} s is not after the previous {previous_t_s:.6f} s"
+            f"sensor frame out of order: t = {t:.6f} s is not after the previous "
+            f"{previous_t_s:.6f} s"
         )
     return 0.0 if previous_t_s is None else t - previous_t_s

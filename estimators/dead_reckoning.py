@@ -29,7 +29,8 @@ def integrate_arc(
 ) -> tuple[float, float, float]:
     """Advance a pose by a travelled distance and heading change (midpoint rule)."""
     mid = yaw + 0.5 * dyaw_rad
-    return x + distance_m * math.cos(mid), y + distance_m * math.sin(mid), wrap_angle(yaw + dyaw_rad)
+    return (x + distance_m * math.cos(mid), y + distance_m * math.sin(mid),
+            wrap_angle(yaw + dyaw_rad))
 
 
 class DeadReckoning:

@@ -1,0 +1,51 @@
+"""Control laws as policies: ``act(obs) -> action`` and stable-baselines3's ``predict``.
+
+Controllers read the observation laid out in :mod:`controllers.observation` and return
+``[v / v_max, omega / omega_max]`` as float32 in [-1, 1]^2.
+"""
+
+from __future__ import annotations
+
+from controllers.base import Controller, Policy
+from controllers.observation import OBS_DIM, OBS_NAMES, build_observation
+from controllers.pure_pursuit import PurePursuitController
+from controllers.stanley import StanleyController
+from controllers.yamauchi import YamauchiController, is_hurwitz
+
+CONTROLLERS: dict[str, type[Controller]] = {
+    "yamauchi": YamauchiController,
+    "pure_pursuit": PurePursuitController,
+    "stanley": StanleyController,
+}
+
+
+def controller_by_name(name: str, **kw: object) -> Controller:
+    """Build the controller registered as ``name`` with keyword arguments ``kw``
+    (``v_max_mps``, ``omega_max_rps``, ``dt_s`` and the law's gains).
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is unknown (the message lists the known names).
+    """
+    try:
+        cls = CONTROLLERS[name]
+    except KeyError:
+        raise ValueError(f"unknown controller {name!r}; known controllers: "
+                         f"{', '.join(sorted(CONTROLLERS))}") from None
+    return cls(**kw)  # type: ignore[arg-type]
+
+
+__all__ = [
+    "CONTROLLERS",
+    "OBS_DIM",
+    "OBS_NAMES",
+    "Controller",
+    "Policy",
+    "PurePursuitController",
+    "StanleyController",
+    "YamauchiController",
+    "build_observation",
+    "controller_by_name",
+    "is_hurwitz",
+]

@@ -1,0 +1,100 @@
+"""The observation and action layout shared by the environments and the controllers.
+
+The environment builds the observation from its *estimated* pose (never ground truth) and the
+path projection; the env imports these indices from here so the two sides cannot drift apart.
+
+Observation, float32, shape (12,):
+
+=====  =====================  =======  ==================================================
+index  constant               unit     meaning
+=====  =====================  =======  ==================================================
+0      ``OBS_X``              m        estimated x position, world frame
+1      ``OBS_Y``              m        estimated y position, world frame
+2      ``OBS_COS_YAW``        --       cos of estimated yaw
+3      ``OBS_SIN_YAW``        --       sin of estimated yaw
+4      ``OBS_SPEED``          m/s      estimated forward speed
+5      ``OBS_YAW_RATE``       rad/s    estimated yaw rate, counter-clockwise positive
+6      ``OBS_SLIP_ANGLE``     rad      slip angle estimate β̂, body x to velocity
+                                       (0 until an estimator provides one)
+7      ``OBS_CROSS_TRACK``    m        signed cross-track error, > 0 LEFT of the path
+8      ``OBS_HEADING_ERROR``  rad      yaw - path heading, wrapped to (-pi, pi]
+9      ``OBS_CURVATURE``      1/m      path curvature at the projection, > 0 turning left
+10     ``OBS_REF_SPEED``      m/s      reference speed at the projection
+11     ``OBS_PROGRESS``       --       fraction of the path done, 0..1
+=====  =====================  =======  ==================================================
+
+Action, float32 in [-1, 1]^2: ``[v / v_max, omega / omega_max]``, a body twist (forward speed,
+yaw rate) that the env turns into wheel or track speeds through each vehicle's kinematics.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Protocol
+
+import numpy as np
+
+OBS_X = 0
+OBS_Y = 1
+OBS_COS_YAW = 2
+OBS_SIN_YAW = 3
+OBS_SPEED = 4
+OBS_YAW_RATE = 5
+OBS_SLIP_ANGLE = 6
+OBS_CROSS_TRACK = 7
+OBS_HEADING_ERROR = 8
+OBS_CURVATURE = 9
+OBS_REF_SPEED = 10
+OBS_PROGRESS = 11
+OBS_DIM = 12
+
+OBS_NAMES = ("x_m", "y_m", "cos_yaw", "sin_yaw", "speed_mps", "yaw_rate_rps",
+             "slip_angle_est_rad", "cross_track_m", "heading_error_rad", "path_curvature_1pm",
+             "ref_speed_mps", "progress")
+
+ACT_SPEED = 0
+ACT_YAW_RATE = 1
+ACT_DIM = 2
+
+
+class ProjectionLike(Protocol):
+    """What :func:`build_observation` needs of a path projection
+    (:class:`slipenv.paths.PathProjection` satisfies it)."""
+
+    s: float
+    cross_track_m: float
+    heading_rad: float
+    curvature_1pm: float
+    speed_mps: float
+    remaining_m: float
+
+
+def wrap_to_pi(angle: np.ndarray | float) -> np.ndarray | float:
+    """Wrap angles [rad] to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
+
+
+def build_observation(x_m: float, y_m: float, yaw_rad: float, speed_mps: float,
+                      yaw_rate_rps: float, projection: ProjectionLike,
+                      slip_angle_est_rad: float = 0.0) -> np.ndarray:
+    """Assemble the observation vector from an estimated state and a path projection.
+
+    Parameters
+    ----------
+    x_m, y_m, yaw_rad, speed_mps, yaw_rate_rps : float
+        Estimated pose [m, m, rad], forward speed [m/s] and yaw rate [rad/s].
+    projection : ProjectionLike
+        Projection of ``(x_m, y_m)`` on the path (``Path.project``).
+    slip_angle_est_rad : float
+        Estimated slip angle β̂ [rad]; 0 when no estimator provides one.
+
+    Returns
+    -------
+    np.ndarray, shape (12,), float32
+    """
+    total = projection.s + projection.remaining_m
+    obs = (x_m, y_m, math.cos(yaw_rad), math.sin(yaw_rad), speed_mps, yaw_rate_rps,
+           slip_angle_est_rad, projection.cross_track_m,
+           float(wrap_to_pi(yaw_rad - projection.heading_rad)), projection.curvature_1pm,
+           projection.speed_mps, projection.s / total if total > 0.0 else 1.0)
+    return np.asarray(obs, dtype=np.float32)

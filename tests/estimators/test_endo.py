@@ -1,0 +1,105 @@
+"""Endo's slip ratios (Yamauchi Eq. 7-8) and the Endo odometry."""
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from estimators.base import OdometryGeometry
+from estimators.endo import (
+    EndoOdometry,
+    endo_left_share,
+    endo_ratio,
+    endo_slip_ratios,
+    endo_slip_velocities,
+)
+from estimators.gyrodometry import Gyrodometry
+from estimators.skid_steer import body_velocity
+from tests.estimators import skid_steer_synth as synth
+
+TREAD = synth.TREAD_M
+GEOM = OdometryGeometry(0.06, TREAD, 1e9)  # fine encoders: quantisation below 1e-9 rad
+run = synth.feed
+
+
+def constant_run(v_l, v_r, gyro, n=100):
+    return synth.constant_frames(v_l, v_r, gyro, n=n, geometry=GEOM)
+
+
+def test_closed_form_solves_eq7_and_eq8():
+    rng = np.random.default_rng(1)
+    k = 500
+    v_l = rng.choice([-1.0, 1.0], k) * rng.uniform(0.01, 0.3, k)
+    v_r = rng.choice([-1.0, 1.0], k) * rng.uniform(0.01, 0.3, k)
+    omega = rng.uniform(-1.0, 1.0, k)
+    for n in (0.824, 1.3):
+        alpha_l, alpha_r = endo_slip_ratios(v_l, v_r, omega, TREAD, n, speed_eps_mps=0.0)
+        _, _, omega_back = body_velocity(v_l, v_r, alpha_l, alpha_r, 0.0, TREAD)
+        np.testing.assert_allclose(omega_back, omega, rtol=0, atol=1e-12)  # Eq. 7
+        np.testing.assert_allclose(alpha_l / alpha_r, endo_ratio(v_l, v_r, n), rtol=1e-10)  # Eq. 8
+
+
+def test_pivot_turn_loses_equal_fractions():
+    # Pivot: v_l = -v_r; gyro sees 70 % of the commanded rate -> both tracks slip 30 %.
+    v = 0.1
+    alpha_l, alpha_r = endo_slip_ratios(-v, v, 0.7 * 2 * v / TREAD, TREAD, 0.824, 0.0)
+    assert alpha_l == pytest.approx(0.3) and alpha_r == pytest.approx(0.3)
+    est = run(EndoOdometry(GEOM, 0.824), constant_run(-v, v, 0.7 * 2 * v / TREAD))[-1]
+    assert math.hypot(est.x_m, est.y_m) < 1e-9 and est.speed_mps == pytest.approx(0.0, abs=1e-9)
+    assert est.extras["alpha_l"] == pytest.approx(0.3, abs=1e-4)  # ε-regularised ratio
+
+
+def test_straight_driving_is_well_conditioned():
+    assert endo_left_share(0.1, 0.1, 0.824) == 0.5
+    # Gyro noise while driving straight only makes equal and opposite slips, no extra distance.
+    rng = np.random.default_rng(2)
+    frames = constant_run(0.1, 0.1, 0.0, n=200)
+    frames = [replace(f, gyro_z_rad_s=0.003 * rng.standard_normal()) for f in frames]
+    endo = run(EndoOdometry(GEOM, 0.824), frames)
+    gyro = run(Gyrodometry(GEOM), frames)
+    for a, b in zip(endo, gyro, strict=True):
+        assert (a.x_m, a.y_m) == (pytest.approx(b.x_m, abs=1e-12), pytest.approx(b.y_m, abs=1e-12))
+        assert a.extras["alpha_l"] == pytest.approx(-a.extras["alpha_r"], abs=1e-12)
+        assert abs(a.extras["alpha_l"]) < 0.1
+
+
+def test_standstill_with_gyro_bias_does_not_creep():
+    est = run(EndoOdometry(GEOM, 0.824), constant_run(0.0, 0.0, 0.01, n=100))
+    assert all(math.isfinite(e.extras["alpha_l"]) for e in est)
+    assert est[-1].x_m == 0.0 and est[-1].y_m == 0.0
+
+
+def test_stopped_track_limit():
+    # Exact Eq. 8 with v_l -> 0: all the discrepancy is the moving track's, s_l -> 0.
+    s_l, s_r = endo_slip_velocities(0.0, 0.1, 0.1, TREAD, 0.824, speed_eps_mps=0.0)
+    assert s_l == 0.0 and s_r == pytest.approx(-(TREAD * 0.1 - 0.1))
+    # The regularised share is finite and tends to the exact one as eps -> 0.
+    shares = [float(endo_left_share(0.0, 0.1, 0.824, eps)) for eps in (1e-3, 1e-6, 1e-12)]
+    assert shares == sorted(shares, reverse=True) and shares[-1] < 0.05
+    assert np.isfinite(endo_slip_ratios(0.0, 0.1, 0.1, TREAD, 0.824)).all()
+    assert np.isfinite(endo_slip_velocities(0.0, 0.0, 0.1, TREAD, 1.5)).all()  # n > 1
+
+
+def test_endo_recovers_true_speed_on_turning_run():
+    # Data generated with Endo's law: Endo's path length is right, gyrodometry's too long.
+    run_ = synth.simulate_run(0.05, 0.35, 0.7, 0.0, 0.0, 8.0, np.random.default_rng(3))
+    endo = synth.run_estimator(EndoOdometry(synth.GEOMETRY, synth.N_TRUE), run_)[1]
+    gyro = synth.run_estimator(Gyrodometry(synth.GEOMETRY), run_)[1]
+    assert np.mean([e.speed_mps for e in endo[1:]]) == pytest.approx(run_.v_x, rel=2e-3)
+    assert np.mean([e.speed_mps for e in gyro[1:]]) > 1.02 * run_.v_x
+
+
+@pytest.mark.parametrize("n", [0.0, -0.8, float("nan"), float("inf"), "abc", None])
+def test_bad_n_is_rejected(n):
+    with pytest.raises(ValueError, match="n must"):
+        EndoOdometry(GEOM, n)
+    with pytest.raises(ValueError, match="n must"):
+        endo_slip_ratios(0.1, 0.2, 0.1, TREAD, n)
+
+
+def test_bad_eps_and_tread_are_rejected():
+    with pytest.raises(ValueError, match="speed_eps_mps"):
+        EndoOdometry(GEOM, 0.824, speed_eps_mps=-1e-3)
+    with pytest.raises(ValueError, match="tread_m"):
+        endo_slip_velocities(0.1, 0.2, 0.1, -0.41, 0.824)

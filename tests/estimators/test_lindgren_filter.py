@@ -1,0 +1,235 @@
+"""LindgrenEKF mechanics: schemes, one step against the plain functions and filterpy, sign
+conventions at the SensorFrame boundary, association and gating, covariance health, bad input."""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+
+import numpy as np
+import pytest
+from filterpy.kalman import ExtendedKalmanFilter
+
+from estimators import lindgren_models as lm
+from estimators import lindgren_observations as lo
+from estimators.base import Estimator, OdometryGeometry
+from estimators.lindgren_ekf import LindgrenEKF, LindgrenNoise, OracleSoil, Scheme, parse_scheme
+from estimators.lindgren_synth import simulate, straight_and_turn
+from slipenv.sensors.beacons import BeaconScanner, default_beacons_xy
+from slipenv.sensors.frame import SensorFrame
+
+GEOM = OdometryGeometry(wheel_radius_m=0.275, track_width_m=1.5, counts_per_rad=285.0)
+CROSS = np.array([[10.0, 0.0], [0.0, 10.0], [-10.0, 0.0], [0.0, -10.0]])
+
+
+def frame(t: float, counts=(0.0, 0.0), torque=(0.0, 0.0), **kw) -> SensorFrame:
+    return SensorFrame(t_s=t, enc_counts=np.array(counts, dtype=float),
+                       wheel_torque_nm=np.array(torque, dtype=float), **kw)
+
+
+def truth0() -> np.ndarray:
+    x0 = np.zeros(lm.N_SLIP)
+    x0[[lm.IX, lm.IY]] = (-8.0, -4.0)
+    x0[lm.IRL:lm.IRR + 1] = (0.283, 0.287)
+    x0[lm.IKL:] = (2500.0, 2200.0)
+    return x0
+
+
+def torque(t: float, x: np.ndarray) -> np.ndarray:
+    """Varying drive torque, more on the outer wheel in turns [N m]."""
+    base = 150.0 + 100.0 * math.sin(2.0 * math.pi * t / 7.0)
+    return np.array([base - 300.0 * x[lm.IOM], base + 300.0 * x[lm.IOM]])
+
+
+def synthetic(n_steps: int, seed: int = 3):
+    return simulate(GEOM, truth0(), n_steps, 0.05, np.random.default_rng(seed),
+                    reference=straight_and_turn(), torque=torque, scanner=BeaconScanner())
+
+
+def snapshot(ekf: LindgrenEKF) -> tuple:
+    return ekf.x.copy(), ekf.P.copy(), {k: len(v) for k, v in ekf.history.items()}
+
+
+def assert_unchanged(ekf: LindgrenEKF, snap: tuple) -> None:
+    np.testing.assert_array_equal(ekf.x, snap[0])
+    np.testing.assert_array_equal(ekf.P, snap[1])
+    assert {k: len(v) for k, v in ekf.history.items()} == snap[2]
+
+
+def test_schemes_by_number_and_name() -> None:
+    assert parse_scheme(4) is Scheme.ALL_SLIP
+    assert parse_scheme("laser_inertial") is Scheme.LASER_INERTIAL
+    assert parse_scheme("2") is Scheme.ODOMETRY_ONLY
+    with pytest.raises(ValueError, match="unknown scheme"):
+        parse_scheme("all")
+    with pytest.raises(ValueError, match="unknown scheme"):
+        parse_scheme(5)
+    assert LindgrenEKF(GEOM, "all_slip").n == 13
+    assert LindgrenEKF(GEOM, 3).n == 9
+    assert LindgrenEKF(GEOM, 4, oracle=OracleSoil((0.28, 0.28), (2e3, 2e3))).n == 9
+    with pytest.raises(ValueError, match="oracle"):
+        LindgrenEKF(GEOM, 3, oracle=OracleSoil((0.28, 0.28), (2e3, 2e3)))
+    with pytest.raises(ValueError, match="beacons_xy"):
+        LindgrenEKF(GEOM, 1)
+    with pytest.raises(ValueError, match="jerk_psd_v"):
+        LindgrenNoise(jerk_psd_v=-1.0)
+    with pytest.raises(TypeError):
+        LindgrenNoise(jerk=1.0)  # unknown keys are an error
+
+
+def test_protocol_reset_and_extras() -> None:
+    ekf = LindgrenEKF(GEOM, 4, beacons_xy=CROSS)
+    assert isinstance(ekf, Estimator)
+    est = ekf.reset(1.0, 2.0, 3.5, frame(0.0, pitch_rad=-0.05, roll_rad=0.02))
+    assert (est.x_m, est.y_m) == (1.0, 2.0)
+    assert est.yaw_rad == pytest.approx(3.5 - 2.0 * math.pi)
+    assert est.cov.shape == (3, 3)
+    assert est.extras["R_wl_m"] == 0.275 and est.extras["k_sr"] == LindgrenNoise().k_s0
+    assert (ekf.x[lm.IA1], ekf.x[lm.IA2]) == (0.05, -0.02)  # REP 103 -> Lindgren signs
+    with pytest.raises(RuntimeError, match="before reset"):
+        LindgrenEKF(GEOM, 3).update(frame(0.1))
+
+
+def test_one_step_matches_plain_functions_and_filterpy() -> None:
+    """Predict (Eq. 6-7), then gyro and odometer updates equal filterpy's EKF to 1e-12."""
+    params = LindgrenNoise()
+    ekf = LindgrenEKF(GEOM, 3, params, beacons_xy=CROSS)
+    x0 = np.array([1.0, 2.0, 0.3, 0.8, 0.1, 0.2, -0.1, 0.01, 0.02])
+    P0 = np.diag(np.linspace(0.01, 0.1, 9) ** 2)
+    ekf.reset_state(x0, P0, frame(0.0, counts=(100.0, 200.0)))
+    tau, gz, dc = 0.05, 0.12, np.array([44.0, 48.0])
+    ekf.update(frame(tau, counts=(100.0 + dc[0], 200.0 + dc[1]), gyro_z_rad_s=gz))
+    F = lm.process_F(x0, tau)
+    Q = lm.process_Q(x0, tau, params.jerk_psd_v, params.jerk_psd_omega, params.tilt_psd)
+    kf = ExtendedKalmanFilter(dim_x=9, dim_z=1)
+    kf.x, kf.P = lm.process_fx(x0, tau), F @ P0 @ F.T + Q
+    kf.update(np.array([gz]), lambda s: lo.ins_H(s)[2:], lambda s: lo.ins_hx(s)[2:],
+              R=np.array([[params.gyro_var_rad2ps2]]))
+    args = (tau, 0.275, 1.5, 285.0)
+    kf.update(dc, lambda s: lo.odo_H(s, *args), lambda s: lo.odo_hx(s, *args),
+              R=np.eye(2) * params.odometer_var_rad2 * 285.0**2)
+    np.testing.assert_allclose(ekf.x, kf.x, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(ekf.P, kf.P, rtol=1e-10, atol=1e-12)
+    assert ekf.skipped == {"acc_nan": 1, "tilt_nan": 1}
+
+
+def test_slope_signs_at_the_sensor_frame_boundary() -> None:
+    """At rest, nose up 0.1 rad and left side up 0.05 rad (REP 103: pitch -0.1, roll +0.05):
+    accelerometers read +0.1 g forward and +0.05 g left. The filter must explain both with
+    tilt, not with acceleration."""
+    g = lm.G_MPS2
+    ekf = LindgrenEKF(GEOM, 3, beacons_xy=CROSS)
+    ekf.reset(0.0, 0.0, 0.0, frame(0.0))
+    for k in range(1, 41):
+        est = ekf.update(frame(0.05 * k, gyro_z_rad_s=0.0, acc_x_mps2=0.1 * g,
+                               acc_y_mps2=0.05 * g, pitch_rad=-0.1, roll_rad=0.05))
+    assert ekf.x[lm.IA1] == pytest.approx(0.1, abs=1e-3)
+    assert ekf.x[lm.IA2] == pytest.approx(-0.05, abs=1e-3)
+    assert abs(ekf.x[lm.IVD]) < 0.01 and abs(est.speed_mps) < 1e-3
+
+
+def test_association_picks_the_beacon_and_gates_an_outlier() -> None:
+    def fresh() -> LindgrenEKF:
+        ekf = LindgrenEKF(GEOM, 1, beacons_xy=CROSS)
+        ekf.reset(0.0, 0.0, 0.0, frame(0.0))
+        return ekf
+
+    good = math.pi / 2 + 0.005  # beacon (0, 10), 5 mrad off
+    outlier = math.pi / 4  # halfway between two beacons: no beacon is near
+    a, b = fresh(), fresh()
+    a.update(frame(0.05, beacon_bearings_rad=np.array([outlier, good]),
+                   beacon_times_s=np.array([0.05, 0.03])))
+    b.update(frame(0.05, beacon_bearings_rad=np.array([good]),
+                   beacon_times_s=np.array([0.03])))
+    (t, y, S), = a.history["bearing"]
+    assert t == 0.03 and y.shape == (1,) and S.shape == (1, 1)
+    assert y[0] == pytest.approx(0.005, abs=1e-4)  # matched (0, 10), not a neighbour
+    assert a.skipped["bearing_gated"] == 1 and "bearing_gated" not in b.skipped
+    assert a.estimate().extras["skipped"]["bearing_gated"] == 1
+    np.testing.assert_array_equal(a.x, b.x)  # the outlier changed nothing
+    np.testing.assert_array_equal(a.P, b.P)
+
+
+def test_covariance_stays_symmetric_positive_definite() -> None:
+    """100 s of straight-and-turn with the slip model; laser cut after 50 s (Lindgren §5)."""
+    run = synthetic(2000)
+    ekf = LindgrenEKF(GEOM, 4, beacons_xy=default_beacons_xy())
+    ekf.reset(*truth0()[:3], run.frames[0])
+    min_eig = np.inf
+    for f in run.frames[1:]:
+        if f.t_s > 50.0:
+            f = dataclasses.replace(f, beacon_bearings_rad=np.zeros(0),
+                                    beacon_times_s=np.zeros(0))
+        ekf.update(f)
+        np.testing.assert_array_equal(ekf.P, ekf.P.T)
+        np.linalg.cholesky(ekf.P)
+        min_eig = min(min_eig, np.linalg.eigvalsh(ekf.P).min())
+    assert min_eig > 0.0
+    assert np.all(np.isfinite(ekf.x))
+
+
+def test_rejected_frames_leave_the_state_unchanged() -> None:
+    run = synthetic(21)
+    ekf = LindgrenEKF(GEOM, 4, beacons_xy=default_beacons_xy())
+    ekf.reset(*truth0()[:3], run.frames[0])
+    for f in run.frames[1:20]:
+        ekf.update(f)
+    snap, t = snapshot(ekf), run.frames[19].t_s
+    nxt = run.frames[20]
+    bad = {
+        "out of order": dataclasses.replace(nxt, t_s=t),
+        "not finite": dataclasses.replace(nxt, t_s=math.nan),
+        "encoder": dataclasses.replace(nxt, enc_counts=np.array([math.nan, 1.0])),
+        "enc_counts has shape": dataclasses.replace(nxt, enc_counts=np.zeros(1)),
+        "outside": dataclasses.replace(nxt, beacon_bearings_rad=np.array([0.1]),
+                                       beacon_times_s=np.array([t - 0.01])),
+        "one length": dataclasses.replace(nxt, beacon_times_s=np.zeros(7)),
+    }
+    for message, f in bad.items():
+        with pytest.raises(ValueError, match=message):
+            ekf.update(f)
+        assert_unchanged(ekf, snap)
+
+    def boom(*args, **kwargs):
+        raise FloatingPointError("injected")
+
+    ekf._update_odometry = boom  # fails after the bearing and inertial updates of the frame
+    with pytest.raises(FloatingPointError):
+        ekf.update(nxt)
+    assert_unchanged(ekf, snap)
+    del ekf._update_odometry
+    ekf.update(nxt)
+    assert len(ekf.history["odo"]) == snap[2]["odo"] + 1
+
+
+def test_nan_optional_sensors_are_counted_and_logged(caplog: pytest.LogCaptureFixture) -> None:
+    run = synthetic(2)
+    ekf = LindgrenEKF(GEOM, 4, beacons_xy=default_beacons_xy())
+    ekf.reset(*truth0()[:3], run.frames[0])
+    f = run.frames[1]
+    f = dataclasses.replace(
+        f, gyro_z_rad_s=math.nan, acc_x_mps2=math.nan, wheel_torque_nm=np.array([1.0, np.nan]),
+        beacon_bearings_rad=np.array([0.1, math.nan]), beacon_times_s=np.array([0.02, 0.03]))
+    with caplog.at_level(logging.WARNING, logger="estimators.lindgren_ekf"):
+        est = ekf.update(f)
+    assert est.extras["skipped"] == {"gyro_nan": 1, "acc_nan": 1, "torque_nan": 1,
+                                     "bearing_nan": 1}
+    assert "torque_nan" in caplog.text and "gyro_nan" in caplog.text
+    assert len(ekf.history["tilt"]) == 1 and len(ekf.history["odo"]) == 0
+    assert np.all(np.isfinite(ekf.x))
+
+
+def test_history_layout() -> None:
+    run = synthetic(40)
+    ekf = LindgrenEKF(GEOM, 4, beacons_xy=default_beacons_xy())
+    ekf.reset(*truth0()[:3], run.frames[0])
+    for f in run.frames[1:]:
+        ekf.update(f)
+    dims = {"gyro": 1, "acc": 2, "tilt": 2, "odo": 2, "bearing": 1}
+    for sensor, n_z in dims.items():
+        recs = ekf.history[sensor]
+        assert len(recs) >= 40
+        assert all(y.shape == (n_z,) and S.shape == (n_z, n_z) for _, y, S in recs)
+        assert np.all(np.diff([r[0] for r in recs]) >= 0.0)
+    assert ekf.estimate().extras["n_bearings_used"] == len(ekf.history["bearing"])

@@ -1,0 +1,89 @@
+"""Bekker sinkage and compaction resistance of wheels and tracks."""
+
+import math
+
+import numpy as np
+import pytest
+
+from slipenv.terramechanics import CONCRETE, LOOSE_SAND
+from slipenv.terramechanics.bekker import (
+    compaction_resistance_n,
+    track_compaction_law,
+    track_sinkage_m,
+    wheel_compaction_law,
+    wheel_sinkage_m,
+)
+
+SAND = (LOOSE_SAND.k_c, LOOSE_SAND.k_phi, LOOSE_SAND.n_exp)
+
+
+def test_wheel_sinkage_matches_closed_form_for_n_equal_one():
+    # n = 1: z = (3 W / (2 (k_c + b k_phi) sqrt(D)))^(2/3)
+    w, b, d, k_c, k_phi = 120.0, 0.1, 0.33, 1.4e3, 820e3
+    expected = (3 * w / (2 * (k_c + b * k_phi) * math.sqrt(d))) ** (2 / 3)
+    assert wheel_sinkage_m(w, b, d, k_c, k_phi, 1.0) == pytest.approx(expected, rel=1e-14)
+    assert expected == pytest.approx(0.024168, abs=1e-6)
+
+
+def test_wheel_sinkage_increases_with_load():
+    z = wheel_sinkage_m(np.array([0.0, 50.0, 100.0, 400.0]), 0.1, 0.33, *SAND)
+    assert z[0] == 0.0 and np.all(np.diff(z) > 0.0)
+
+
+def test_wheel_sinkage_decreases_with_stiffer_soil():
+    k_c, k_phi, n = SAND
+    z = wheel_sinkage_m(120.0, 0.1, 0.33, k_c, np.array([1.0, 2.0, 4.0]) * k_phi, n)
+    assert np.all(np.diff(z) < 0.0)
+    z = wheel_sinkage_m(120.0, 0.1, 0.33, np.array([1.0, 100.0]) * k_c, k_phi, n)
+    assert z[1] < z[0]
+
+
+def test_wheel_sinkage_decreases_with_larger_wheel():
+    z = wheel_sinkage_m(120.0, np.array([0.1, 0.2]), np.array([0.33, 0.66]), *SAND)
+    assert z[1] < z[0]
+
+
+def test_compaction_resistance_matches_closed_form_and_grows_with_load():
+    z, b, k_c, k_phi = 0.02, 0.1, 1.4e3, 820e3
+    assert compaction_resistance_n(z, b, k_c, k_phi, 1.0) == pytest.approx(
+        b * (k_c / b + k_phi) * z**2 / 2, rel=1e-14)
+    r = compaction_resistance_n(wheel_sinkage_m(np.array([50.0, 100.0]), b, 0.33, *SAND), b,
+                                *SAND)
+    assert r[1] > r[0] > 0.0
+
+
+def test_wheel_compaction_power_law_equals_sinkage_then_resistance():
+    w = np.array([0.0, 10.0, 120.0, 3000.0])
+    gamma, e = wheel_compaction_law(0.1, 0.33, *SAND)
+    direct = compaction_resistance_n(wheel_sinkage_m(w, 0.1, 0.33, *SAND), 0.1, *SAND)
+    assert gamma * w**e == pytest.approx(direct, rel=1e-12)
+    assert e == pytest.approx((2 * 1.1 + 2) / (2 * 1.1 + 1), rel=1e-15)
+
+
+def test_track_sinkage_is_pressure_over_modulus_to_one_over_n():
+    w, b, length, k_c, k_phi = 100.0, 0.11, 0.6, 990.0, 1.52843e6
+    p = w / (b * length)
+    z = track_sinkage_m(w, b, length, k_c, k_phi, 1.1)
+    assert z == pytest.approx((p / (k_c / b + k_phi)) ** (1 / 1.1), rel=1e-14)
+    assert z < wheel_sinkage_m(w, b, 0.1, k_c, k_phi, 1.1)  # a track spreads the load
+
+
+def test_track_compaction_power_law_equals_sinkage_then_resistance():
+    w = np.array([10.0, 100.0, 1000.0])
+    gamma, e = track_compaction_law(0.11, 0.6, *SAND)
+    direct = compaction_resistance_n(track_sinkage_m(w, 0.11, 0.6, *SAND), 0.11, *SAND)
+    assert gamma * w**e == pytest.approx(direct, rel=1e-12)
+
+
+def test_compaction_resistance_is_zero_on_concrete():
+    p = CONCRETE.params()
+    for law in (wheel_compaction_law(0.1, 0.33, p.k_c, p.k_phi, p.n_exp, p.deformable),
+                track_compaction_law(0.1, 0.6, p.k_c, p.k_phi, p.n_exp, p.deformable)):
+        gamma, e = law
+        assert gamma == 0.0
+        assert np.all(gamma * np.array([0.0, 100.0, 1e4]) ** e == 0.0)
+
+
+def test_negative_load_counts_as_no_load():
+    assert wheel_sinkage_m(-5.0, 0.1, 0.33, *SAND) == 0.0
+    assert track_sinkage_m(-5.0, 0.1, 0.6, *SAND) == 0.0
