@@ -2,6 +2,8 @@
 
 ``slipenv run ENV_ID``    a baseline controller drives one episode: table + trajectory plot.
 ``slipenv bench``         env steps/s next to bare ``stepSimulation`` of the same world.
+``slipenv reproduce NAME``  a source paper's experiment re-run: paper vs simulation.
+``slipenv diagnose LOG``  what a measured log says the simulation gets wrong, and the fix.
 ``slipenv list``          registered environment ids.
 """
 
@@ -56,6 +58,21 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    from slipenv.experiments import experiment
+
+    run = experiment(args.name)
+    result = run(quick=args.quick, out_dir=args.out or f"runs/reproduce_{args.name}",
+                 json_path=args.json, seed=args.seed, progress=not args.quiet)
+    return 0 if result is not None else 1
+
+
+def cmd_diagnose(args: argparse.Namespace) -> int:
+    from slipenv.diagnose.cli import main as diagnose_main
+
+    return diagnose_main(args)
+
+
 def cmd_list(args: argparse.Namespace) -> int:
     for env_id in _env_ids():
         print(env_id)
@@ -83,6 +100,21 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--repeats", type=int, default=5, help="interleaved repetitions")
     bench.add_argument("--quiet", action="store_true")
     bench.set_defaults(func=cmd_bench)
+    rep = sub.add_parser("reproduce", help="re-run a source paper's experiment")
+    rep.add_argument("name", help="lindgren | yamauchi")
+    rep.add_argument("--quick", action="store_true", help="shorter runs, same experiments")
+    rep.add_argument("--json", default=None, help="write metrics and paper values as JSON")
+    rep.add_argument("--out", default=None, help="folder for plots (default runs/reproduce_NAME)")
+    rep.add_argument("--seed", type=int, default=0)
+    rep.add_argument("--quiet", action="store_true", help="no progress bars")
+    rep.set_defaults(func=cmd_reproduce)
+    diag = sub.add_parser("diagnose", help="diagnose a measured log (slipenv-log/1)")
+    diag.add_argument("log_dir", help="folder with meta.json and signals.csv")
+    diag.add_argument("--json", default=None, help="write the diagnosis report (JSON)")
+    diag.add_argument("--report", default=None, help="folder for the human report (plots+text)")
+    diag.add_argument("--seed", type=int, default=0)
+    diag.add_argument("--quiet", action="store_true", help="no progress bars")
+    diag.set_defaults(func=cmd_diagnose)
     sub.add_parser("list", help="registered env ids").set_defaults(func=cmd_list)
     return parser
 

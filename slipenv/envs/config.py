@@ -46,6 +46,9 @@ class SlipEnvConfig:
         Arguments of the estimator.
     sensor_noise : SensorNoise | dict
         Sensor noise levels (DESIGN §4 defaults).
+    beacons : bool | array | BeaconScanner | None
+        Laser beacon scanner (Lindgren §2.2): ``True`` for the default 15-beacon field, an
+        (n, 2) array of surveyed beacon positions [m], or a scanner; ``None`` for none.
     control_hz, physics_hz : float
         Env step and physics substep rates [Hz].
     max_episode_s : float
@@ -69,6 +72,7 @@ class SlipEnvConfig:
     estimator: str = "dead_reckoning"
     estimator_kwargs: dict = field(default_factory=dict)
     sensor_noise: Any = field(default_factory=SensorNoise)
+    beacons: Any = None
     control_hz: float = 20.0
     physics_hz: float = 240.0
     max_episode_s: float = 120.0

@@ -27,13 +27,14 @@ ENTRY_POINT = "slipenv.envs.slip_env:SlipEnv"
 PRESETS: dict[str, dict] = {
     "slipenv/FarmField-v0": dict(
         vehicle="farm_2wd", terrain="flat", soil="field_loam", force_model="linear",
-        path="lindgren_circles", path_kwargs={"radius_m": 4.0, "speed_mps": 0.6},
-        max_episode_s=140.0,
+        path="lindgren_circles", path_kwargs={"radius_m": 4.0, "speed_mps": 0.5},
+        beacons=True, estimator="lindgren_ekf", estimator_kwargs={"scheme": 4},
+        max_episode_s=170.0,
     ),
     "slipenv/TrackedSlopeCircle-v0": dict(
         vehicle="tracked_patako",
         terrain={"kind": "slope", "slope_deg": 15.0, "downhill_azimuth_deg": -90.0},
-        soil="toyoura_sand", force_model="janosi",
+        soil="toyoura_sand", force_model="janosi", estimator="endo",
         path="circle", path_kwargs={"radius_m": 0.25, "speed_mps": 0.05, "loops": 1.0},
         max_episode_s=60.0, max_cross_track_m=0.5,
     ),

@@ -112,7 +112,15 @@ class SlipEnv(gym.Env):
         return path_by_name(cfg.path, **cfg.path_kwargs)
 
     def _make_beacons(self, cfg: SlipEnvConfig):
-        return None
+        if cfg.beacons is None or cfg.beacons is False:
+            return None
+        from slipenv.sensors.beacons import BeaconScanner
+
+        if cfg.beacons is True or cfg.beacons == "default":
+            return BeaconScanner()
+        if isinstance(cfg.beacons, BeaconScanner):
+            return cfg.beacons
+        return BeaconScanner(beacons_xy=np.asarray(cfg.beacons, dtype=float))
 
     # -- gymnasium API ---------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
@@ -121,6 +129,7 @@ class SlipEnv(gym.Env):
         x0, y0, yaw0 = self.path.start_pose()
         truth = self.sim.reset(x0, y0, yaw0)
         self._truth = truth
+        self.sensors.reset()
         frame = self.sensors.measure(truth, self.np_random)
         self.estimator = make_estimator(
             self.config.estimator, self.spec_vehicle, self._estimator_context(),
@@ -212,8 +221,17 @@ class SlipEnv(gym.Env):
 
     # -- helpers ---------------------------------------------------------------------------
     def _estimator_context(self) -> dict:
-        """What an estimator may be told beyond the nominal geometry (dt, oracle truth)."""
-        return {"dt_s": self.dt_s, "config": self.config}
+        """What an estimator may be told beyond the nominal geometry: the control period, the
+        surveyed beacon positions, and (for ``*_oracle`` estimators only) the true soil."""
+        from slipenv.envs.estimation import true_soil_for_oracle
+
+        beacons = self.sensors.beacons
+        return {
+            "dt_s": self.dt_s,
+            "beacons_xy": None if beacons is None else beacons.beacons_xy,
+            "true_soil": lambda: true_soil_for_oracle(
+                self.sim, self.config.sensor_noise.torque_scale),
+        }
 
     def _observe(self, estimate: PoseEstimate) -> np.ndarray:
         self._last_estimate = estimate

@@ -1,0 +1,24 @@
+"""The source papers' experiments re-run in simulation (``slipenv reproduce NAME``).
+
+Each experiment module registers itself in :data:`EXPERIMENTS` with a function
+``run(quick: bool, out_dir: str, json_path: str | None, seed: int, progress: bool) -> dict``
+returning ``{"metrics": {...}, "paper": {...}}`` and printing a paper-vs-simulation table.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+
+# name -> module path; modules are imported on demand (they pull in plotting, PyBullet).
+EXPERIMENT_MODULES: dict[str, str] = {
+    "lindgren": "slipenv.experiments.lindgren",
+    "yamauchi": "slipenv.experiments.yamauchi",
+}
+
+
+def experiment(name: str) -> Callable[..., dict]:
+    """The ``run`` function of experiment ``name`` (``ValueError`` listing names if unknown)."""
+    if name not in EXPERIMENT_MODULES:
+        raise ValueError(f"unknown experiment {name!r}; known: {sorted(EXPERIMENT_MODULES)}")
+    return importlib.import_module(EXPERIMENT_MODULES[name]).run

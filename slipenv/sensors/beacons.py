@@ -99,8 +99,15 @@ class BeaconScanner:
         self.head_phase_rad = float(head_phase_rad)
         self._last: tuple[float, float, float, float] | None = None  # (t, x, y, yaw)
 
-    def reset(self, t_s: float, x_m: float, y_m: float, yaw_rad: float) -> None:
-        """Start a new episode at time ``t_s`` and pose (x, y, yaw); no bearings before it."""
+    def reset(self, t_s: float | None = None, x_m: float = 0.0, y_m: float = 0.0,
+              yaw_rad: float = 0.0) -> None:
+        """Start a new episode at time ``t_s`` and pose (x, y, yaw); no bearings before it.
+
+        Without ``t_s`` the scanner forgets its last sweep and the next ``scan`` starts it.
+        """
+        if t_s is None:
+            self._last = None
+            return
         self._last = (float(t_s), float(x_m), float(y_m), float(yaw_rad))
 
     def _body_bearings(self, x: float, y: float, yaw: float) -> np.ndarray:

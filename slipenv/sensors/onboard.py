@@ -103,6 +103,11 @@ class SensorSuite:
         self.compass = Compass(noise.compass_std_rad)
         self.beacons = beacons
 
+    def reset(self) -> None:
+        """Start a new episode (the beacon scanner starts sweeping at the next frame)."""
+        if self.beacons is not None:
+            self.beacons.reset()
+
     def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> SensorFrame:
         """Read every sensor once (in a fixed order, so the random stream is reproducible)."""
         enc = self.encoders.measure(truth, rng)
