@@ -83,6 +83,11 @@ class SlipEnv(gym.Env):
                 f"got {render_mode!r}"
             )
         self.config = SlipEnvConfig.from_kwargs(config, **kwargs)
+        if self.config.model:
+            # A fitted model extension (``slipenv diagnose``) rewrites the world's configuration.
+            from slipenv.diagnose.extension import apply_model
+
+            self.config = apply_model(self.config, self.config.model)
         cfg = self.config
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": int(cfg.control_hz)}
