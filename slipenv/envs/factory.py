@@ -38,7 +38,8 @@ def contact_geometry(spec: VehicleSpec) -> ContactGeometry:
     """Contact patch of the driven wheels (all driven wheels of a preset are alike)."""
     wheel = next(w for w in spec.wheels if w.role == "driven")
     return ContactGeometry(
-        radius_m=wheel.radius_m, width_m=wheel.width_m, contact_length_m=wheel.contact_length_m
+        radius_m=wheel.radius_m, width_m=wheel.width_m, contact_length_m=wheel.contact_length_m,
+        track_length_m=spec.track_length_m,
     )
 
 

@@ -83,6 +83,7 @@ def tracked_patako(road_wheels_per_side: int = 5) -> VehicleSpec:
         max_speed_mps=0.3,
         max_yaw_rate_rad_s=math.radians(45.0),
         counts_per_rad=285.0,
+        track_length_m=length,
         assumed=("chassis_mass_kg", "road wheel radius", "road_wheels_per_side"),
     )
 

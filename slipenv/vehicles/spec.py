@@ -124,6 +124,9 @@ class VehicleSpec:
         its wheel joints are matched by ``urdf_wheel_joints``.
     urdf_wheel_joints : tuple[str, ...]
         Joint names of the URDF wheels in the order of ``wheels``.
+    track_length_m : float | None
+        Ground contact length of each track for a tracked vehicle [m] (its road wheels split
+        it into ``contact_length_m`` shares); ``None`` for wheeled vehicles.
     contact_sinkage_m : float
         Static sinkage of the compliant wheel-ground contact under the vehicle's own weight [m].
         Soil is not rigid: the compliance spreads the load over a track's road wheels (a rigid
@@ -149,6 +152,7 @@ class VehicleSpec:
     wheelbase_m: float | None = None
     urdf: str | None = None
     urdf_wheel_joints: tuple[str, ...] = ()
+    track_length_m: float | None = None
     contact_sinkage_m: float = 0.001
     assumed: tuple[str, ...] = field(default_factory=tuple)
 
