@@ -48,7 +48,7 @@ def make_force_model(force_model: Any, spec: VehicleSpec):
     geometry = contact_geometry(spec)
     if isinstance(force_model, str):
         return force_model_by_name(force_model, geometry)
-    if hasattr(force_model, "resistance_n") and callable(force_model):
+    if hasattr(force_model, "resistance_n") and not isinstance(force_model, type):
         return force_model
     if callable(force_model):
         model = force_model(geometry)

@@ -15,7 +15,6 @@ import numpy as np
 import pybullet as p
 from gymnasium import spaces
 
-from controllers.observation import OBS_NAMES
 from estimators.base import PoseEstimate, wrap_angle
 from slipenv.envs.config import SlipEnvConfig
 from slipenv.envs.estimation import make_estimator
@@ -24,6 +23,12 @@ from slipenv.paths import Path, path_by_name
 from slipenv.sensors.onboard import SensorSuite
 from slipenv.sim.simulator import PhysicsBlowUp, Simulator, VehicleTruth
 from slipenv.vehicles.kinematics import twist_to_commands
+
+# Physical bounds of each observation entry (see the table in SlipEnv's docstring).
+OBS_LOW = np.array([-1e4, -1e4, -1, -1, -50, -20, -math.pi, -1e4, -math.pi, -1e3, 0, 0],
+                   dtype=np.float32)
+OBS_HIGH = np.array([1e4, 1e4, 1, 1, 50, 20, math.pi, 1e4, math.pi, 1e3, 50, 1],
+                    dtype=np.float32)
 
 
 class SlipEnv(gym.Env):
@@ -91,6 +96,12 @@ class SlipEnv(gym.Env):
         cfg = self.config
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": int(cfg.control_hz)}
+        from slipenv.envs.estimation import ESTIMATORS
+
+        if cfg.estimator not in ESTIMATORS:
+            raise ValueError(
+                f"unknown estimator {cfg.estimator!r}; known estimators: {sorted(ESTIMATORS)}"
+            )
         self.spec_vehicle = make_vehicle(cfg.vehicle)
         self.path = self._make_path(cfg)
         soil_map = make_soil_map(cfg.soil, cfg.soil_map)
@@ -104,8 +115,7 @@ class SlipEnv(gym.Env):
         self.max_steps = int(math.ceil(cfg.max_episode_s / self.dt_s))
         self.sensors = SensorSuite(self.spec_vehicle.counts_per_rad, cfg.sensor_noise,
                                    beacons=self._make_beacons(cfg))
-        self.observation_space = spaces.Box(-np.inf, np.inf, shape=(len(OBS_NAMES),),
-                                            dtype=np.float32)
+        self.observation_space = spaces.Box(OBS_LOW, OBS_HIGH, dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         self.estimator = None
         self._truth: VehicleTruth | None = None
@@ -254,7 +264,7 @@ class SlipEnv(gym.Env):
         )
         if not np.all(np.isfinite(obs)):
             raise FloatingPointError(f"non-finite observation from the estimator: {obs}")
-        return obs
+        return np.clip(obs, OBS_LOW, OBS_HIGH)
 
     def _info(self, truth: VehicleTruth, estimate: PoseEstimate, frame, extra: dict) -> dict:
         contact = self.sim.injector.contact_state()

@@ -7,12 +7,12 @@ truth. Units are SI; frames follow ROS REP 103 (body x forward, y left, z up).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SensorFrame:
     """One time-stamped set of sensor readings.
 
@@ -55,3 +55,15 @@ class SensorFrame:
     beacon_bearings_rad: np.ndarray = field(default_factory=lambda: np.zeros(0))
     beacon_times_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
     steer_rad: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def __eq__(self, other: object) -> bool:
+        """Field-wise equality (arrays compared element-wise, NaN equal to NaN)."""
+        if not isinstance(other, SensorFrame):
+            return NotImplemented
+        return all(
+            np.array_equal(np.asarray(getattr(self, f.name)), np.asarray(getattr(other, f.name)),
+                           equal_nan=True)
+            for f in fields(self)
+        )
+
+    __hash__ = None  # mutable arrays inside: not hashable

@@ -44,7 +44,7 @@ class VehicleTruth:
     channel_angle_rad : np.ndarray
         Cumulative true wheel rotation of each drive channel [rad].
     channel_torque_nm : np.ndarray
-        Mean motor torque per channel over the step, summed over the channel's wheels [N m].
+        Motor torque per channel at the end of the step, summed over its wheels [N m].
     """
 
     t_s: float
@@ -153,7 +153,6 @@ class Simulator:
         self.command(np.zeros(len(self.spec.channels)), [0.0] * len(self.spec.wheels))
         for _ in range(int(round(settle_s / self.dt_s))):
             self._substep()
-        self.injector.read_mean_joint_torque()
         self.injector.chassis_contact = False
         self.t_s = 0.0
         self._angle_offset = self._channel_angles()
@@ -237,7 +236,7 @@ class Simulator:
         self._prev_vel = v_ref
         specific = to_body((acc[0], acc[1], acc[2] + GRAVITY_MPS2))
         roll, pitch, yaw = p.getEulerFromQuaternion(quat)
-        by_joint = dict(zip(self.injector.spin_joints, self.injector.read_mean_joint_torque(),
+        by_joint = dict(zip(self.injector.spin_joints, self.injector.joint_torques(),
                             strict=True))
         channel_torque = [sum(by_joint[j] for j in js) for js in self._channel_joints]
         return VehicleTruth(

@@ -103,7 +103,6 @@ class WheelSoilInjector:
         self.body_id = body.body_id
         self.ground_id = ground_id
         self.force_model = force_model
-        self._scalar = getattr(force_model, "scalar", None)
         self.soil_map = soil_map
         self.dt_s = dt_s
         self.min_relaxation_m = min_relaxation_m
@@ -131,32 +130,33 @@ class WheelSoilInjector:
         self.fx = [0.0] * n
         self.fy = [0.0] * n
         self.res = [0.0] * n
-        self.joint_torque_sum = [0.0] * len(self.spin_joints)
-        self.substeps_since_read = 0
         self.chassis_contact = False
         self.sample_soil(force=True)
 
     # -- soil ------------------------------------------------------------------------------
     def sample_soil(self, force: bool = False) -> None:
-        """Sample the soil under every wheel (called once per control step)."""
+        """Sample the soil under every wheel and bind its force kernels (once per control step)."""
         uniform = isinstance(self.soil_map, UniformSoil)
         if uniform and not force:
             return
         if uniform:
             params = self.soil_map.params_at(np.zeros(1), np.zeros(1))
-            self._soil_arrays = params
-            per_wheel = [params] * self.n
+            rows = [params] * self.n
         else:
             links = p.getLinkStates(self.body_id, self.links, physicsClientId=self.client)
             xs = np.array([ls[0][0] for ls in links])
             ys = np.array([ls[0][1] for ls in links])
             params = self.soil_map.params_at(xs, ys)
-            self._soil_arrays = params
-            per_wheel = [_params_row(params, k) for k in range(self.n)]
-        self._soil_rows = per_wheel
+            rows = [_params_row(params, k) for k in range(self.n)]
+        self._soil_rows = rows
         self._h = [self.dt_s / max(float(sp.shear_modulus_m), self.min_relaxation_m)
-                   for sp in per_wheel]
-        self._r_eff = [self._rolling_radius_m(sp, k) for k, sp in enumerate(per_wheel)]
+                   for sp in rows]
+        self._r_eff = [self._rolling_radius_m(sp, k) for k, sp in enumerate(rows)]
+        kernels = {}
+        for sp in rows:
+            if id(sp) not in kernels:
+                kernels[id(sp)] = _kernel(self.force_model, sp)
+        self._kernels = [kernels[id(sp)] for sp in rows]
         self._damping = [self._critical_damping(k) for k in range(self.n)]
 
     def _critical_damping(self, k: int) -> tuple[float, float]:
@@ -168,15 +168,12 @@ class WheelSoilInjector:
         """
         if not self.driven[k]:
             return 0.0, 0.0
-        load = np.array([self.mass_share_kg * 9.81])
-        eps = np.array([1e-3])
-        zero = np.zeros(1)
-        soil = self._soil_rows[k]
-        fx, _ = self.force_model(eps, zero, load, soil)
-        _, fy = self.force_model(zero, eps, load, soil)
+        load = self.mass_share_kg * 9.81
+        fx, _, _ = self._kernels[k](1e-3, 0.0, load)
+        _, fy, _ = self._kernels[k](0.0, 1e-3, load)
         sigma = self.dt_s / self._h[k]
         out = []
-        for stiffness in (abs(float(fx[0])) / 1e-3, abs(float(fy[0])) / 1e-3):
+        for stiffness in (abs(fx) / 1e-3, abs(fy) / 1e-3):
             c = 2.0 * math.sqrt(stiffness / sigma * self.mass_share_kg)
             out.append(min(c, self.mass_share_kg / self.dt_s))
         return out[0], out[1]
@@ -188,46 +185,52 @@ class WheelSoilInjector:
 
     # -- the substep -----------------------------------------------------------------------
     def apply(self) -> None:
-        """Compute and apply the soil forces for the coming substep."""
+        """Compute and apply the soil forces for the coming substep (the hot path)."""
         cid, bid, n = self.client, self.body_id, self.n
         contacts = p.getContactPoints(bodyA=bid, bodyB=self.ground_id, physicsClientId=cid)
         links = p.getLinkStates(bid, self.links, computeLinkVelocity=1, physicsClientId=cid)
         joints = p.getJointStates(bid, self.spin_joints, physicsClientId=cid)
         load = [0.0] * n
-        acc = [[0.0] * 6 for _ in range(n)]  # load-weighted contact point and normal
+        acc = [None] * n  # load-weighted contact point and normal per wheel
         link_to_wheel = self.link_to_wheel
         for cp in contacts:
             f = cp[9]
+            if f <= 0.0:
+                continue
             k = link_to_wheel.get(cp[3])
             if k is None:
-                if f > 0.0:
-                    self.chassis_contact = True
+                self.chassis_contact = True
                 continue
-            if f > 0.0:
-                load[k] += f
-                a, pos, nrm = acc[k], cp[6], cp[7]
+            pos, nrm = cp[6], cp[7]
+            a = acc[k]
+            if a is None:
+                acc[k] = [f * pos[0], f * pos[1], f * pos[2], f * nrm[0], f * nrm[1], f * nrm[2]]
+            else:
                 a[0] += f * pos[0]
                 a[1] += f * pos[1]
                 a[2] += f * pos[2]
                 a[3] += f * nrm[0]
                 a[4] += f * nrm[1]
                 a[5] += f * nrm[2]
-        torque_sum = self.joint_torque_sum
-        for i, js in enumerate(joints):
-            torque_sum[i] += js[3]
-        self.substeps_since_read += 1
+            load[k] += f
 
-        slip, tanb, h, r_eff = self.s, self.b, self._h, self._r_eff
-        frames = [None] * n
+        slip, tanb, h, r_eff, kernels = self.s, self.b, self._h, self._r_eff, self._kernels
+        fx_out, fy_out, res_out = [0.0] * n, [0.0] * n, [0.0] * n
+        inv_eps, inv_low = self.inv_resistance_speed, self.inv_low_speed
+        apply_force, world = p.applyExternalForce, p.WORLD_FRAME
         for k in range(n):
-            if load[k] <= 0.0:
+            w = load[k]
+            if w <= 0.0:
                 slip[k] = tanb[k] = 0.0
                 continue
             a = acc[k]
+            inv_w = 1.0 / w
             nx, ny, nz = a[3], a[4], a[5]
             inv = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
             nx, ny, nz = nx * inv, ny * inv, nz * inv
-            qx, qy, qz, qw = links[k][1]
+            cx, cy, cz = a[0] * inv_w, a[1] * inv_w, a[2] * inv_w
+            ls = links[k]
+            qx, qy, qz, qw = ls[1]
             # Axle = the link's y axis in world (the spin axis, invariant under spin).
             ex = 2.0 * (qx * qy - qw * qz)
             ey = 1.0 - 2.0 * (qx * qx + qz * qz)
@@ -237,90 +240,52 @@ class WheelSoilInjector:
             inv = 1.0 / math.sqrt(fx_ * fx_ + fy_ * fy_ + fz_ * fz_)
             fx_, fy_, fz_ = fx_ * inv, fy_ * inv, fz_ * inv
             lx, ly, lz = ny * fz_ - nz * fy_, nz * fx_ - nx * fz_, nx * fy_ - ny * fx_
-            vx, vy, vz = links[k][6]
+            vx, vy, vz = ls[6]
             v_long = vx * fx_ + vy * fy_ + vz * fz_
             if self.driven[k]:
                 # Lateral slip is the sliding of the contact point, not of the wheel centre:
                 # add ω × (contact - centre), which removes the chassis roll (rate × radius)
                 # that would otherwise feed back into the side force.
-                w = load[k]
-                px, py, pz = links[k][0]
-                rx, ry, rz = a[0] / w - px, a[1] / w - py, a[2] / w - pz
-                wx, wy, wz = links[k][7]
+                px, py, pz = ls[0]
+                rx, ry, rz = cx - px, cy - py, cz - pz
+                wx, wy, wz = ls[7]
                 v_lat = ((vx + wy * rz - wz * ry) * lx + (vy + wz * rx - wx * rz) * ly
                          + (vz + wx * ry - wy * rx) * lz)
                 hk = h[k]
                 r_omega = r_eff[k] * joints[self.spin_index[k]][1]
-                frames[k] = (fx_, fy_, fz_, lx, ly, lz, v_long, v_lat, r_omega)
-                v_ref = max(abs(r_omega), abs(v_long))
+                v_ref = abs(r_omega) if abs(r_omega) > abs(v_long) else abs(v_long)
                 s = (slip[k] + hk * (r_omega - v_long)) / (1.0 + hk * v_ref)
-                slip[k] = 1.0 if s > 1.0 else (-1.0 if s < -1.0 else s)
-                v_ref_y = max(abs(v_long), abs(v_lat))
+                s = 1.0 if s > 1.0 else (-1.0 if s < -1.0 else s)
+                v_ref_y = abs(v_long) if abs(v_long) > abs(v_lat) else abs(v_lat)
                 t = (tanb[k] + hk * v_lat) / (1.0 + hk * v_ref_y)
-                tanb[k] = 1.0 if t > 1.0 else (-1.0 if t < -1.0 else t)
-            else:
-                frames[k] = (fx_, fy_, fz_, lx, ly, lz, v_long, 0.0, 0.0)
-
-        fx, fy, res = self._forces(slip, tanb, load)
-        self.load, self.fx, self.fy, self.res = load, fx, fy, res
-        inv_eps = self.inv_resistance_speed
-        inv_low, damping = self.inv_low_speed, self._damping
-        links_k, wheel_states = self.links, links
-        for k in range(n):
-            fr = frames[k]
-            if fr is None:
-                continue
-            v_long = fr[6]
-            # Resistance opposes travel; a linear ramp below resistance_speed_mps keeps it
-            # continuous (and explicit-stable) through zero and exact above it.
-            ramp = v_long * inv_eps
-            r_k = res[k] * (1.0 if ramp > 1.0 else (-1.0 if ramp < -1.0 else ramp))
-            fw0, fw1, fw2, la0, la1, la2 = fr[0], fr[1], fr[2], fr[3], fr[4], fr[5]
-            if self.driven[k]:
-                f_long, f_lat = fx[k], fy[k]
-                r_omega, v_lat = fr[8], fr[7]
+                t = 1.0 if t > 1.0 else (-1.0 if t < -1.0 else t)
+                slip[k], tanb[k] = s, t
+                f_long, f_lat, res = kernels[k](s, t, w)
+                fx_out[k], fy_out[k] = f_long, f_lat
                 speed = max(abs(v_long), abs(r_omega), abs(v_lat)) * inv_low
                 if speed < 1.0:
-                    c_long, c_lat = damping[k]
+                    c_long, c_lat = self._damping[k]
                     fade = 1.0 - speed
                     f_long += fade * c_long * (r_omega - v_long)
                     f_lat -= fade * c_lat * v_lat
-                w = load[k]
-                a = acc[k]
                 # Shear (traction, side force) acts at the contact patch: the motor feels r F.
-                p.applyExternalForce(
-                    bid, links_k[k],
-                    (f_long * fw0 + f_lat * la0, f_long * fw1 + f_lat * la1,
-                     f_long * fw2 + f_lat * la2),
-                    (a[0] / w, a[1] / w, a[2] / w), p.WORLD_FRAME, physicsClientId=cid,
-                )
+                apply_force(bid, self.links[k],
+                            (f_long * fx_ + f_lat * lx, f_long * fy_ + f_lat * ly,
+                             f_long * fz_ + f_lat * lz),
+                            (cx, cy, cz), world, physicsClientId=cid)
+            else:
+                res = kernels[k](0.0, 0.0, w)[2]
+            # Resistance opposes travel; a linear ramp below resistance_speed_mps keeps it
+            # continuous (and explicit-stable) through zero and exact above it.
+            ramp = v_long * inv_eps
+            r_k = res * (1.0 if ramp > 1.0 else (-1.0 if ramp < -1.0 else ramp))
+            res_out[k] = abs(r_k)
             if r_k != 0.0:
                 # Compaction resistance comes from normal stresses that point at the axle: it
                 # acts through the wheel centre and puts no moment on the wheel.
-                p.applyExternalForce(
-                    bid, links_k[k], (-r_k * fw0, -r_k * fw1, -r_k * fw2),
-                    wheel_states[k][0], p.WORLD_FRAME, physicsClientId=cid,
-                )
-
-    def _forces(self, slip, tanb, load) -> tuple[list, list, list]:
-        scalar = self._scalar
-        n = self.n
-        if scalar is not None:
-            rows = self._soil_rows
-            fx, fy, res = [0.0] * n, [0.0] * n, [0.0] * n
-            for k in range(n):
-                if load[k] > 0.0:
-                    fx[k], fy[k], res[k] = scalar(slip[k], tanb[k], load[k], rows[k])
-            return fx, fy, res
-        load_a = np.array(load)
-        fx_a, fy_a = self.force_model(np.array(slip), np.array(tanb), load_a, self._soil_arrays)
-        res_a = self.force_model.resistance_n(load_a, self._soil_arrays)
-        mask = load_a > 0.0
-        return (
-            np.where(mask, fx_a, 0.0).tolist(),
-            np.where(mask, fy_a, 0.0).tolist(),
-            np.where(mask, res_a, 0.0).tolist(),
-        )
+                apply_force(bid, self.links[k], (-r_k * fx_, -r_k * fy_, -r_k * fz_), ls[0],
+                            world, physicsClientId=cid)
+        self.load, self.fx, self.fy, self.res = load, fx_out, fy_out, res_out
 
     # -- reading ---------------------------------------------------------------------------
     def contact_state(self) -> WheelContactState:
@@ -332,13 +297,27 @@ class WheelSoilInjector:
             in_contact=load > 0.0,
         )
 
-    def read_mean_joint_torque(self) -> list[float]:
-        """Mean motor torque of each spin joint since the last read [N m] (then restart)."""
-        m = max(self.substeps_since_read, 1)
-        out = [t / m for t in self.joint_torque_sum]
-        self.joint_torque_sum = [0.0] * len(self.spin_joints)
-        self.substeps_since_read = 0
-        return out
+    def joint_torques(self) -> list[float]:
+        """Motor torque of each spin joint at the last substep [N m]."""
+        states = p.getJointStates(self.body_id, self.spin_joints, physicsClientId=self.client)
+        return [js[3] for js in states]
+
+
+def _kernel(model, soil):
+    """A per-wheel ``(slip, tan_beta, load) -> (fx, fy, resistance)`` for ``model`` on ``soil``.
+
+    slipenv's models give a float kernel; any other ForceModel is wrapped (correct, slower:
+    one vectorised call per wheel).
+    """
+    if hasattr(model, "scalar_kernel"):
+        return model.scalar_kernel(soil)
+
+    def kernel(slip: float, tan_beta: float, load_n: float) -> tuple[float, float, float]:
+        w = np.array([load_n])
+        fx, fy = model(np.array([slip]), np.array([tan_beta]), w, soil)
+        return float(fx[0]), float(fy[0]), float(model.resistance_n(w, soil)[0])
+
+    return kernel
 
 
 def _params_row(params, k: int):

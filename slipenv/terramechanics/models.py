@@ -30,6 +30,8 @@ from slipenv.terramechanics.soil import SoilParams
 __all__ = ["ForceModel", "JanosiForceModel", "LinearSlipForceModel", "ReinaForceModel",
            "FORCE_MODELS", "force_model_by_name"]
 
+_X_SMALL = 1e-5  # [-] as `janosi.okello_secant`: below it h(x) uses its series
+_SIXTH = 1.0 / 6.0
 _ZERO = np.asarray(0.0)
 _ONE = np.asarray(1.0)
 _NEG_TINY = np.asarray(-1e-300)
@@ -75,6 +77,7 @@ class _PatchModel(ABC):
         self._exponent = _ONE
         self._rigid = True
         self._uniform: dict[int, tuple[Any, ...]] = {}
+        self._scalar_cache: dict[int, tuple[Any, ...]] = {}
 
     def _use(self, soil: SoilParams) -> None:
         """Switch to `soil`'s constants (called only when the soil object changes).
@@ -129,6 +132,46 @@ class _PatchModel(ABC):
             return self._f_r * w
         return self._gamma * w ** self._exponent + self._f_r * w
 
+    def scalar_kernel(self, soil: SoilParams) -> Callable[[float, float, float],
+                                                          tuple[float, float, float]]:
+        """A per-wheel float function ``(slip, tan_beta, load_n) -> (fx, fy, resistance)``.
+
+        The same law as `__call__` and `resistance_n` (the tests hold them together to 1e-12)
+        with the soil's constants bound once, restated with `math` because numpy's per-call
+        overhead on one wheel costs more than the physics step (DESIGN §6). The simulation
+        builds one kernel per wheel per control step. ``soil`` must have float fields; the
+        kernel expects ``load_n`` > 0.
+        """
+        gamma, exponent, rigid, k = self._all_constants(soil)
+        gamma, exponent, k = float(gamma), float(exponent), tuple(float(v) for v in k)
+        forces, f_r = self._scalar_forces, self.rolling_resistance_coeff
+
+        if rigid:
+            def kernel(slip: float, tan_beta: float, load_n: float):
+                fx, fy = forces(slip, tan_beta, load_n, k)
+                return fx, fy, f_r * load_n
+        else:
+            def kernel(slip: float, tan_beta: float, load_n: float):
+                fx, fy = forces(slip, tan_beta, load_n, k)
+                return fx, fy, f_r * load_n + gamma * load_n ** exponent
+        return kernel
+
+    def scalar(self, slip: float, tan_beta: float, load_n: float,
+               soil: SoilParams) -> tuple[float, float, float]:
+        """``(fx_n, fy_n, resistance_n)`` of one wheel in plain floats (see `scalar_kernel`)."""
+        entry = self._scalar_cache.get(id(soil))
+        if entry is None or entry[0] is not soil:
+            if len(self._scalar_cache) >= _UNIFORM_CACHE_SIZE:
+                self._scalar_cache.clear()
+            entry = (soil, self.scalar_kernel(soil))
+            self._scalar_cache[id(soil)] = entry
+        return entry[1](slip, tan_beta, load_n)
+
+    @abstractmethod
+    def _scalar_forces(self, slip: float, tan_beta: float, load_n: float,
+                       k: tuple[float, ...]) -> tuple[float, float]:
+        """The force law of `__call__` for one wheel, constants ``k`` from `_derive`."""
+
     def __repr__(self) -> str:
         return (f"{type(self).__name__}({self.geometry!r}, "
                 f"rolling_resistance_coeff={self.rolling_resistance_coeff!r})")
@@ -181,6 +224,15 @@ class JanosiForceModel(_PatchModel):
         np.negative(fy, out=fy)
         return secant * slip, fy
 
+    def _scalar_forces(self, slip, tan_beta, load_n, k):
+        ac, tan_phi, inv_b = k
+        f_max = load_n * tan_phi + ac
+        x = math.hypot(slip, tan_beta) * inv_b
+        xc = x if x > _X_SMALL else _X_SMALL
+        h = (math.expm1(-xc) + xc) / (xc * xc) + (xc - x) * _SIXTH  # okello_secant
+        secant = f_max * h * inv_b
+        return secant * slip, -secant * tan_beta
+
 
 class LinearSlipForceModel(_PatchModel):
     """Lindgren's linear slip law, F_x = (k_s/r) s, saturated at the Mohr-Coulomb limit.
@@ -214,6 +266,12 @@ class LinearSlipForceModel(_PatchModel):
         fy = secant * tan_beta
         np.negative(fy, out=fy)
         return secant * slip, fy
+
+    def _scalar_forces(self, slip, tan_beta, load_n, k):
+        ac, tan_phi, half_inv_b = k
+        excess = math.hypot(slip, tan_beta) * half_inv_b
+        secant = (load_n * tan_phi + ac) * half_inv_b / (excess if excess > 1.0 else 1.0)
+        return secant * slip, -secant * tan_beta
 
 
 class ReinaForceModel(_PatchModel):
@@ -274,6 +332,24 @@ class ReinaForceModel(_PatchModel):
         kx = np.maximum(cx * np.expm1(ny) / ny - w * ax, _ZERO)
         ny = np.minimum(sigma * nky, _NEG_TINY)
         nk_y = np.minimum(ncy * np.expm1(ny) / ny + w * ay, _ZERO)
+        return slip * kx, tan_beta * nk_y
+
+    def _scalar_forces(self, slip, tan_beta, load_n, k):
+        nkx, cx, ax, nky, ncy, ay = k
+        sigma = math.hypot(slip, tan_beta)
+        if self.scale_stiffness_with_load:
+            w = load_n
+        else:
+            w = load_n if load_n > 1e-12 else 1e-12
+            sigma /= w
+        ny = min(sigma * nkx, -1e-300)
+        kx = max(cx * math.expm1(ny) / ny - (ax if self.scale_stiffness_with_load else w * ax),
+                 0.0)
+        ny = min(sigma * nky, -1e-300)
+        nk_y = min(ncy * math.expm1(ny) / ny + (ay if self.scale_stiffness_with_load
+                                                else w * ay), 0.0)
+        if self.scale_stiffness_with_load:
+            return slip * kx * w, tan_beta * nk_y * w
         return slip * kx, tan_beta * nk_y
 
     def __repr__(self) -> str:

@@ -11,7 +11,7 @@ from slipenv.terrain.terrain import TerrainSpec
 
 @pytest.fixture
 def make_sim():
-    """``make_sim(vehicle, soil, force_model, terrain=TerrainSpec())`` -> Simulator (closed after)."""
+    """``make_sim(vehicle, soil, force_model, terrain=None)`` -> a Simulator, closed after."""
     sims = []
 
     def build(vehicle: str, soil: str, force_model: str, terrain: TerrainSpec | None = None,
