@@ -17,6 +17,8 @@ import numpy as np
 
 from controllers import controller_by_name
 from controllers.yamauchi import YamauchiController
+from estimators.dead_reckoning import DeadReckoning
+from slipenv.envs.estimation import odometry_geometry
 
 
 @dataclass
@@ -35,6 +37,8 @@ class EpisodeRecord:
     rewards: np.ndarray
     reference_xy: np.ndarray
     end_reason: str
+    wheel_names: tuple[str, ...] = ()
+    dead_reckoning_xy: np.ndarray | None = None
     info_last: dict = field(default_factory=dict)
 
 
@@ -69,6 +73,12 @@ def run_episode(env_id: str, seed: int = 0, controller: str = "yamauchi",
         limit = max_steps or env.spec.max_episode_steps or 10_000
         rows: dict[str, list] = {k: [] for k in (
             "t", "true", "est", "ct", "slip", "beta", "act", "rew")}
+        spec = env.unwrapped.spec_vehicle
+        driven = [k for k, w in enumerate(spec.wheels) if w.role == "driven"]
+        # Plain dead reckoning on the very same sensor frames: what slip does to naive odometry.
+        naive = DeadReckoning(odometry_geometry(spec))
+        naive.reset(*info["true_pose"], info["sensors"])
+        naive_xy = []
         bar = None
         if progress:
             from tqdm import tqdm
@@ -81,7 +91,9 @@ def run_episode(env_id: str, seed: int = 0, controller: str = "yamauchi",
             rows["true"].append(info.get("true_pose", np.full(3, np.nan)))
             rows["est"].append(info.get("estimated_pose", np.full(3, np.nan)))
             rows["ct"].append(info.get("cross_track_true_m", math.nan))
-            rows["slip"].append(info.get("wheel_slip", np.full(1, np.nan)))
+            rows["slip"].append(info["wheel_slip"][driven])
+            estimate = naive.update(info["sensors"])
+            naive_xy.append((estimate.x_m, estimate.y_m))
             rows["beta"].append(info.get("true_slip_angle_rad", math.nan))
             rows["act"].append(np.asarray(action))
             rows["rew"].append(reward)
@@ -101,6 +113,8 @@ def run_episode(env_id: str, seed: int = 0, controller: str = "yamauchi",
             wheel_slip=np.array(rows["slip"]), slip_angle_rad=np.array(rows["beta"]),
             actions=np.array(rows["act"]), rewards=np.array(rows["rew"]),
             reference_xy=np.stack([samples.x_m, samples.y_m], axis=1), end_reason=end,
+            wheel_names=tuple(spec.wheels[k].name for k in driven),
+            dead_reckoning_xy=np.array(naive_xy),
             info_last={k: v for k, v in info.items() if k != "sensors"},
         )
     finally:
@@ -111,6 +125,7 @@ def summarize(rec: EpisodeRecord) -> dict[str, float]:
     """Cross-track, slip and odometry statistics of an episode."""
     ct = rec.cross_track_true_m
     err = np.hypot(*(rec.est_pose[:, :2] - rec.true_pose[:, :2]).T)
+    naive = np.hypot(*(rec.dead_reckoning_xy - rec.true_pose[:, :2]).T)
     slip = np.abs(rec.wheel_slip)
     return {
         "duration_s": float(rec.t_s[-1]) if len(rec.t_s) else 0.0,
@@ -122,7 +137,8 @@ def summarize(rec: EpisodeRecord) -> dict[str, float]:
         "slip_angle_mean_abs_deg": float(np.degrees(np.mean(np.abs(rec.slip_angle_rad)))),
         "odometry_final_error_m": float(err[-1]),
         "odometry_mean_error_m": float(np.mean(err)),
-        "odometry_heading_error_deg": float(np.degrees(abs(
+        "dead_reckoning_final_error_m": float(naive[-1]),
+        "odometry_final_heading_error_deg": float(np.degrees(abs(
             (rec.est_pose[-1, 2] - rec.true_pose[-1, 2] + math.pi) % (2 * math.pi) - math.pi))),
         "return": float(np.sum(rec.rewards)),
     }
@@ -149,7 +165,9 @@ def plot_episode(rec: EpisodeRecord, out_png: str | FsPath) -> FsPath:
     ax = axes[0]
     ax.plot(*rec.reference_xy.T, "k--", lw=1, label="reference path")
     ax.plot(rec.true_pose[:, 0], rec.true_pose[:, 1], "C0", lw=2, label="true trajectory")
-    ax.plot(rec.est_pose[:, 0], rec.est_pose[:, 1], "C3", lw=1.2, label="odometry estimate")
+    ax.plot(rec.est_pose[:, 0], rec.est_pose[:, 1], "C3", lw=1.2, label="estimate (observation)")
+    if rec.dead_reckoning_xy is not None:
+        ax.plot(*rec.dead_reckoning_xy.T, "C7", lw=1, ls=":", label="plain dead reckoning")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
@@ -160,7 +178,8 @@ def plot_episode(rec: EpisodeRecord, out_png: str | FsPath) -> FsPath:
     axes[1].set_xlabel("t [s]")
     axes[1].set_ylabel("true cross-track error [m]")
     for k in range(rec.wheel_slip.shape[1]):
-        axes[2].plot(rec.t_s, rec.wheel_slip[:, k], lw=0.8, label=f"wheel {k}")
+        name = rec.wheel_names[k] if k < len(rec.wheel_names) else f"wheel {k}"
+        axes[2].plot(rec.t_s, rec.wheel_slip[:, k], lw=0.8, label=name)
     axes[2].set_xlabel("t [s]")
     axes[2].set_ylabel("true slip ratio")
     if rec.wheel_slip.shape[1] <= 6:
