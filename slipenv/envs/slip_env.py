@@ -110,7 +110,6 @@ class SlipEnv(gym.Env):
             self.spec_vehicle, cfg.terrain, force_model, soil_map, physics_hz=cfg.physics_hz,
             control_hz=cfg.control_hz, gui=render_mode == "human",
         )
-        self._saved_state = p.saveState(physicsClientId=self.sim.client)
         self.dt_s = self.sim.control_dt_s
         self.max_steps = int(math.ceil(cfg.max_episode_s / self.dt_s))
         self.sensors = SensorSuite(self.spec_vehicle.counts_per_rad, cfg.sensor_noise,
@@ -140,7 +139,6 @@ class SlipEnv(gym.Env):
     # -- gymnasium API ---------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        p.restoreState(self._saved_state, physicsClientId=self.sim.client)
         x0, y0, yaw0 = self.path.start_pose()
         truth = self.sim.reset(x0, y0, yaw0)
         self._truth = truth

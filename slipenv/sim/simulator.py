@@ -113,11 +113,27 @@ class Simulator:
         p.setGravity(0, 0, -GRAVITY_MPS2, physicsClientId=self.client)
         p.setTimeStep(self.dt_s, physicsClientId=self.client)
         self.terrain = build_terrain(terrain, self.client)
+        self.force_model, self.soil_map = force_model, soil_map
+        self.inject = inject
+        self.body = None
+        self._build_vehicle()
+        self.t_s = 0.0
+
+    def _build_vehicle(self) -> None:
+        """(Re)create the vehicle body and its injector.
+
+        Rebuilt at every reset: removing the body destroys its contact manifolds, whose cached
+        impulses would otherwise warm-start the solver differently after each episode and break
+        bit-for-bit determinism (``restoreState`` does not restore them).
+        """
+        vehicle = self.spec
+        if self.body is not None:
+            p.removeBody(self.body.body_id, physicsClientId=self.client)
         self.body = build_vehicle(vehicle, self.client, (0, 0, 1.0), (0, 0, 0, 1))
         self.injector = WheelSoilInjector(
-            self.client, vehicle, self.body, self.terrain.body_id, force_model, soil_map, self.dt_s
+            self.client, vehicle, self.body, self.terrain.body_id, self.force_model,
+            self.soil_map, self.dt_s,
         )
-        self.inject = inject
         self._channel_joints = [
             [self.body.spin_joints[i] for i, w in enumerate(vehicle.wheels) if w.channel == c]
             for c in vehicle.channels
@@ -125,11 +141,11 @@ class Simulator:
         self._all_spin = [j for js in self._channel_joints for j in js]
         self._steer = [j for j in self.body.steer_joints if j is not None]
         self._steer_wheels = [i for i, j in enumerate(self.body.steer_joints) if j is not None]
-        self.t_s = 0.0
 
     # -- episode ----------------------------------------------------------------------------
     def reset(self, x_m: float, y_m: float, yaw_rad: float, settle_s: float = 0.5) -> VehicleTruth:
-        """Place the vehicle at (x, y, yaw) on the ground, brakes on, and let it settle."""
+        """Place a new vehicle at (x, y, yaw) on the ground, brakes on, and let it settle."""
+        self._build_vehicle()
         nrm = self.terrain.normal(x_m, y_m)
         quat = _orientation_on_ground(yaw_rad, nrm)
         # The reference point lies in the driven wheels' centre plane: one rolling radius
@@ -144,10 +160,6 @@ class Simulator:
             self.body.body_id, [target[i] - offset[i] for i in range(3)], quat,
             physicsClientId=self.client,
         )
-        p.resetBaseVelocity(self.body.body_id, [0, 0, 0], [0, 0, 0], physicsClientId=self.client)
-        for j in range(p.getNumJoints(self.body.body_id, physicsClientId=self.client)):
-            p.resetJointState(self.body.body_id, j, 0.0, 0.0, physicsClientId=self.client)
-        self.injector.reset()
         self.t_s = 0.0
         self._angle_offset = np.zeros(len(self.spec.channels))
         self.command(np.zeros(len(self.spec.channels)), [0.0] * len(self.spec.wheels))

@@ -101,6 +101,7 @@ def sphere_wheel_urdf(spec: VehicleSpec) -> str:
     text = re.sub(r'<cylinder length="[0-9.]+" radius="[0-9.]+"\s*/>',
                   f'<sphere radius="{radius}"/>', text)
     text = text.replace('filename="meshes/', f'filename="{folder}/meshes/')
+    text = _explicit_default_inertials(text)
     digest = hashlib.sha1(text.encode()).hexdigest()[:12]
     cache = os.path.join(tempfile.gettempdir(), "slipenv_urdf")
     os.makedirs(cache, exist_ok=True)
@@ -111,6 +112,25 @@ def sphere_wheel_urdf(spec: VehicleSpec) -> str:
             fh.write(text)
         os.replace(tmp, path)  # atomic: parallel test workers may race here
     return path
+
+
+# PyBullet's default for a link without <inertial>: 1 kg, unit inertia (it warns on stdout).
+_DEFAULT_INERTIAL = ('<inertial><mass value="1"/><origin xyz="0 0 0"/>'
+                     '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>')
+
+
+def _explicit_default_inertials(text: str) -> str:
+    """Write PyBullet's default inertial into links that have none: same physics, no warning."""
+    text = re.sub(r'<link name="([^"]+)"\s*/>',
+                  lambda m: f'<link name="{m.group(1)}">{_DEFAULT_INERTIAL}</link>', text)
+
+    def fill(match: re.Match) -> str:
+        block = match.group(0)
+        if "<inertial" in block:
+            return block
+        return block.replace(">", f">{_DEFAULT_INERTIAL}", 1)
+
+    return re.sub(r'<link name="[^"]+">.*?</link>', fill, text, flags=re.S)
 
 
 def _load_urdf(spec, client, position, orientation) -> VehicleBody:
