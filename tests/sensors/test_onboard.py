@@ -1,0 +1,70 @@
+"""Onboard sensors: quantisation, noise levels (DESIGN §4), seeding, conventions."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from slipenv.sensors.noise import G_MPS2, SensorNoise
+from slipenv.sensors.onboard import Compass, Imu, SensorSuite, WheelEncoders
+from slipenv.sim.simulator import VehicleTruth
+
+
+def truth(yaw=0.3, angles=(1.0, -2.5), torque=(10.0, 20.0)) -> VehicleTruth:
+    return VehicleTruth(
+        t_s=1.0, position_m=(1.0, 2.0, 0.0), yaw_rad=yaw, pitch_rad=0.05, roll_rad=-0.1,
+        velocity_body_mps=(0.5, 0.01, 0.0), yaw_rate_rad_s=0.2,
+        specific_force_body_mps2=(0.3, 0.1, 9.81),
+        channel_angle_rad=np.array(angles), channel_torque_nm=np.array(torque),
+    )
+
+
+def test_encoders_report_integer_counts_quantised_at_285_per_rad():
+    counts = WheelEncoders(285.0).measure(truth(), np.random.default_rng(0))
+    assert counts.dtype == np.int64
+    np.testing.assert_array_equal(counts, [285, -713])
+
+
+def test_imu_noise_has_the_lindgren_variances():
+    noise = SensorNoise()
+    imu = Imu(noise)
+    rng = np.random.default_rng(1)
+    samples = np.array([imu.measure(truth(), rng) for _ in range(20000)])
+    assert np.var(samples[:, 0] / G_MPS2) == pytest.approx(4.5e-4, rel=0.05)
+    assert np.var(samples[:, 1] / G_MPS2) == pytest.approx(3.0e-4, rel=0.05)
+    assert np.var(samples[:, 2]) == pytest.approx(6.5e-5, rel=0.05)
+    assert np.mean(samples[:, 2]) == pytest.approx(0.2, abs=3e-4)
+
+
+def test_gyro_bias_shifts_the_yaw_rate():
+    imu = Imu(SensorNoise(gyro_bias_rad_s=0.01, gyro_var_rad2_s2=0.0))
+    assert imu.measure(truth(), np.random.default_rng(0))[2] == pytest.approx(0.21)
+
+
+def test_compass_wraps_to_minus_pi_pi():
+    reading = Compass(0.0).measure(truth(yaw=3.5), np.random.default_rng(0))
+    assert reading == pytest.approx(3.5 - 2 * math.pi)
+
+
+def test_the_same_generator_state_gives_the_same_frame():
+    suite = SensorSuite(285.0, SensorNoise())
+    a = suite.measure(truth(), np.random.default_rng(42))
+    b = suite.measure(truth(), np.random.default_rng(42))
+    c = suite.measure(truth(), np.random.default_rng(43))
+    assert a == b and a != c
+
+
+def test_perfect_sensors_report_the_truth():
+    frame = SensorSuite(285.0, SensorNoise.perfect()).measure(truth(), np.random.default_rng(0))
+    assert frame.gyro_z_rad_s == 0.2 and frame.roll_rad == -0.1 and frame.pitch_rad == 0.05
+    np.testing.assert_allclose(frame.wheel_torque_nm, [10.0, 20.0])
+
+
+@pytest.mark.parametrize("field", ["acc_x_var_g2", "torque_rel_std", "compass_std_rad"])
+def test_negative_or_nan_noise_is_rejected(field):
+    with pytest.raises(ValueError, match=field):
+        SensorNoise(**{field: -1.0})
+    with pytest.raises(ValueError, match=field):
+        SensorNoise(**{field: float("nan")})
