@@ -4,6 +4,7 @@
 ``slipenv bench``         env steps/s next to bare ``stepSimulation`` of the same world.
 ``slipenv reproduce NAME``  a source paper's experiment re-run: paper vs simulation.
 ``slipenv diagnose LOG``  what a measured log says the simulation gets wrong, and the fix.
+``slipenv train ENV_ID``  a stable-baselines3 agent, evaluated next to the baseline.
 ``slipenv list``          registered environment ids.
 """
 
@@ -73,6 +74,22 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     return diagnose_main(args)
 
 
+def cmd_train(args: argparse.Namespace) -> int:
+    from agents.train import evaluate, train
+
+    model = train(args.env_id, algo=args.algo, total_timesteps=args.timesteps, seed=args.seed,
+                  residual=not args.no_residual, out=args.out, progress=not args.quiet)
+    agent = evaluate(model, args.env_id, n_episodes=args.episodes,
+                     residual=not args.no_residual)
+    baseline = evaluate("baseline", args.env_id, n_episodes=args.episodes)
+    print(f"{'policy':<10} {'return':>10} {'± std':>8} {'mean |cross-track| [m]':>24}")
+    for name, r in (("baseline", baseline), (args.algo, agent)):
+        print(f"{name:<10} {r.mean_return:>10.2f} {r.std_return:>8.2f} "
+              f"{r.mean_abs_cross_track_m:>24.3f}")
+    print(f"model: {args.out}.zip")
+    return 0
+
+
 def cmd_list(args: argparse.Namespace) -> int:
     for env_id in _env_ids():
         print(env_id)
@@ -115,6 +132,16 @@ def build_parser() -> argparse.ArgumentParser:
     diag.add_argument("--seed", type=int, default=0)
     diag.add_argument("--quiet", action="store_true", help="no progress bars")
     diag.set_defaults(func=cmd_diagnose)
+    tr = sub.add_parser("train", help="train an SB3 agent (residual on the baseline by default)")
+    tr.add_argument("env_id")
+    tr.add_argument("--algo", default="ppo", help="ppo | sac")
+    tr.add_argument("--timesteps", type=int, default=20_000)
+    tr.add_argument("--seed", type=int, default=0)
+    tr.add_argument("--episodes", type=int, default=3, help="evaluation episodes")
+    tr.add_argument("--no-residual", action="store_true", help="learn the whole action")
+    tr.add_argument("--out", default="runs/agents/model", help="model path (without .zip)")
+    tr.add_argument("--quiet", action="store_true")
+    tr.set_defaults(func=cmd_train)
     sub.add_parser("list", help="registered env ids").set_defaults(func=cmd_list)
     return parser
 
