@@ -63,8 +63,9 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     from slipenv.experiments import experiment
 
     run = experiment(args.name)
+    extra = {"save_model": True} if getattr(args, "save_model", False) else {}
     result = run(quick=args.quick, out_dir=args.out or f"runs/reproduce_{args.name}",
-                 json_path=args.json, seed=args.seed, progress=not args.quiet)
+                 json_path=args.json, seed=args.seed, progress=not args.quiet, **extra)
     return 0 if result is not None else 1
 
 
@@ -124,6 +125,9 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--out", default=None, help="folder for plots (default runs/reproduce_NAME)")
     rep.add_argument("--seed", type=int, default=0)
     rep.add_argument("--quiet", action="store_true", help="no progress bars")
+    rep.add_argument("--save-model", action="store_true",
+                     help="yamauchi: also write the fitted slip model to slipenv/data (the "
+                          "default observation of slipenv/TrackedSlopeCircle-v0)")
     rep.set_defaults(func=cmd_reproduce)
     diag = sub.add_parser("diagnose", help="diagnose a measured log (slipenv-log/1)")
     diag.add_argument("log_dir", help="folder with meta.json and signals.csv")

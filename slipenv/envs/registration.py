@@ -8,7 +8,8 @@ id                                     task
 =====================================  =====================================================
 ``slipenv/FarmField-v0``               Lindgren's 2WD farm vehicle, 4 m circles on field loam
 ``slipenv/TrackedSlopeCircle-v0``      Yamauchi's tracked vehicle, r = 0.25 m circle, 15°
-                                       sandy side slope, 5 cm/s
+                                       sandy side slope, 5 cm/s; observes slip-compensated
+                                       odometry and its slip angle estimate β̂
 ``slipenv/RoverMounds-v0``             Reina's 4WS rover crossing lunar-simulant sand with
                                        mounds (slalom at 8 cm/s)
 ``slipenv/HuskySand-v0``               pybullet_data's Husky on loose sand, s-curve
@@ -18,11 +19,34 @@ id                                     task
 
 from __future__ import annotations
 
+import json
 import math
+import warnings
+from importlib import resources
 
 import gymnasium as gym
 
 ENTRY_POINT = "slipenv.envs.slip_env:SlipEnv"
+# Fitted by ``slipenv reproduce yamauchi --save-model``; shipped in slipenv/data.
+YAMAUCHI_MODEL = "yamauchi_slip_model.json"
+
+
+def yamauchi_observation() -> dict:
+    """Estimator options of the tracked env: Yamauchi's slip-compensated odometry with the
+    shipped fitted model (Eq. 9 coefficients and Endo's n), so the observation carries β̂.
+
+    Falls back to Endo's odometry (β̂ = 0), with a warning, if the model file is missing.
+    """
+    try:
+        saved = json.loads(resources.files("slipenv").joinpath("data", YAMAUCHI_MODEL)
+                           .read_text())
+    except FileNotFoundError:
+        warnings.warn(f"slipenv/data/{YAMAUCHI_MODEL} is missing; TrackedSlopeCircle-v0 "
+                      "observes Endo odometry without slip angle", RuntimeWarning, stacklevel=2)
+        return {"estimator": "endo", "estimator_kwargs": {}}
+    return {"estimator": "slip_compensated",
+            "estimator_kwargs": {"beta_model": saved["beta_model"], "n": saved["n"]}}
+
 
 PRESETS: dict[str, dict] = {
     "slipenv/FarmField-v0": dict(
@@ -34,7 +58,7 @@ PRESETS: dict[str, dict] = {
     "slipenv/TrackedSlopeCircle-v0": dict(
         vehicle="tracked_patako",
         terrain={"kind": "slope", "slope_deg": 15.0, "downhill_azimuth_deg": -90.0},
-        soil="toyoura_sand", force_model="janosi", estimator="endo",
+        soil="toyoura_sand", force_model="janosi", **yamauchi_observation(),
         path="circle", path_kwargs={"radius_m": 0.25, "speed_mps": 0.05, "loops": 1.0},
         max_episode_s=60.0, max_cross_track_m=0.5,
     ),

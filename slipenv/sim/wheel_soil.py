@@ -12,10 +12,11 @@ Slip (the convention of ``slipenv.terramechanics``): s = (r ω - v) / max(|r ω|
 [-1, 1], > 0 in drive; tan β = v_lat / |v_long|. Both are *states* with a relaxation length σ,
 as in tyre models (Pacejka, Tyre and Vehicle Dynamics, §7.2.1):
 
-    σ ds/dt + V s = r ω - v,        V = max(|r ω|, |v|)
-    σ db/dt + V_y b = v_lat,        V_y = max(|v_long|, |v_lat|)
+    σ ds/dt + V s = r ω - v,        σ db/dt + V b = v_lat,        V = max(|r ω|, |v|, |v_lat|)
 
-whose steady state is the kinematic slip. At standstill V = 0 and the state integrates the
+whose steady state is the kinematic slip (with one reference speed V for both components, so
+that (s, tan β) keeps the direction of the contact point's sliding velocity at large slip; at
+ordinary slip V = |r ω| ≈ |v| and tan β = v_lat/|v|). At standstill V = 0 and the state integrates the
 slip displacement, so a parked vehicle is held by a soil "spring" (the Janosi shear
 deformation) instead of creeping, and a wheel spinning at v = 0 reaches s = 1 with no
 division by zero. The update is backward Euler, unconditionally stable for this linear ODE,
@@ -119,6 +120,7 @@ class WheelSoilInjector:
         self.driven = [w.role == "driven" for w in spec.wheels]
         self.radius = [w.radius_m for w in spec.wheels]
         self.soil_radius = [w.soil_rolling_radius_m for w in spec.wheels]
+        self.fixed_radius = [w.rolling_radius_m for w in spec.wheels]
         self.reset()
 
     def reset(self) -> None:
@@ -179,6 +181,8 @@ class WheelSoilInjector:
         return out[0], out[1]
 
     def _rolling_radius_m(self, soil_params, k: int) -> float:
+        if self.fixed_radius[k] is not None:  # a fitted model extension (slipenv diagnose)
+            return self.fixed_radius[k]
         if bool(soil_params.deformable) and self.soil_radius[k] is not None:
             return self.soil_radius[k]
         return self.radius[k] * float(soil_params.rolling_radius_scale)
@@ -253,11 +257,13 @@ class WheelSoilInjector:
                          + (vz + wx * ry - wy * rx) * lz)
                 hk = h[k]
                 r_omega = r_eff[k] * joints[self.spin_index[k]][1]
-                v_ref = abs(r_omega) if abs(r_omega) > abs(v_long) else abs(v_long)
+                # One reference speed for both components, so that (s, tan β) points along
+                # the contact point's sliding velocity (rω - v, v_lat) even at large slip: the
+                # combined-slip laws split the resultant by this direction.
+                v_ref = max(abs(r_omega), abs(v_long), abs(v_lat))
                 s = (slip[k] + hk * (r_omega - v_long)) / (1.0 + hk * v_ref)
                 s = 1.0 if s > 1.0 else (-1.0 if s < -1.0 else s)
-                v_ref_y = abs(v_long) if abs(v_long) > abs(v_lat) else abs(v_lat)
-                t = (tanb[k] + hk * v_lat) / (1.0 + hk * v_ref_y)
+                t = (tanb[k] + hk * v_lat) / (1.0 + hk * v_ref)
                 t = 1.0 if t > 1.0 else (-1.0 if t < -1.0 else t)
                 slip[k], tanb[k] = s, t
                 f_long, f_lat, res = kernels[k](s, t, w)

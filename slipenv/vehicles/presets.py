@@ -58,9 +58,19 @@ def tracked_patako(road_wheels_per_side: int = 5) -> VehicleSpec:
     Each track is ``road_wheels_per_side`` road wheels that share one sprocket speed (one drive
     channel), each carrying an equal share of the track's ground contact length. Body
     503 × 686 × 522 mm (Table 1). The mass in Table 1 is illegible in our copy: assumed.
+
+    Table 1's 0.60 m is the length of the track; it wraps around the sprocket and the idler, so
+    on firm ground it bears on the soil only between their axles, 0.60 m - 2r = 0.48 m
+    (Wong, Theory of Ground Vehicles, Ch. 4: the contact length of a track is the distance
+    between the centres of sprocket and idler). Sand would add the sinkage-deep arcs of the
+    sprocket and idler, about 2 sqrt(2 r z) = 2 cm for z = 1 mm, which is neglected. The contact
+    length sets the skid-steering resistance moment (mu W L/4, Wong Ch. 7): with 0.60 m the
+    simulated vehicle could not turn uphill on the 15° slope at all.
     """
-    tread, length, width = 0.41, 0.60, 0.11
-    r = 0.06  # assumed road-wheel / sprocket radius
+    tread, track_length, width = 0.41, 0.60, 0.11
+    r = 0.06  # assumed road-wheel / sprocket / idler radius
+    # Ground contact between the sprocket and idler axles (docstring): 0.48 m, not 0.60 m.
+    length = track_length - 2.0 * r
     share = length / road_wheels_per_side
     xs = [-length / 2 + share * (i + 0.5) for i in range(road_wheels_per_side)]
     wheels = tuple(
@@ -84,7 +94,8 @@ def tracked_patako(road_wheels_per_side: int = 5) -> VehicleSpec:
         max_yaw_rate_rad_s=math.radians(45.0),
         counts_per_rad=285.0,
         track_length_m=length,
-        assumed=("chassis_mass_kg", "road wheel radius", "road_wheels_per_side"),
+        assumed=("chassis_mass_kg", "road wheel radius", "road_wheels_per_side",
+                 "track_length_m (contact between sprocket and idler axles)"),
     )
 
 

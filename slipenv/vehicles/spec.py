@@ -51,6 +51,9 @@ class WheelSpec:
         Effective rolling radius on deformable soil when it is known per wheel (Lindgren §3.2:
         0.283 / 0.287 m on soil against 0.275 m on concrete); ``None`` uses
         ``radius_m * soil.rolling_radius_scale``.
+    rolling_radius_m : float | None
+        Effective rolling radius on every surface, when a fitted model extension sets it
+        (``slipenv diagnose``, effect ``rolling_radius``); overrides both of the above.
     """
 
     name: str
@@ -63,6 +66,7 @@ class WheelSpec:
     contact_length_m: float = 0.1
     steered: bool = False
     soil_rolling_radius_m: float | None = None
+    rolling_radius_m: float | None = None
 
     def __post_init__(self) -> None:
         owner = f"WheelSpec({self.name!r})"
@@ -81,6 +85,8 @@ class WheelSpec:
             raise ValueError(f"{owner}.position_m must be three finite numbers")
         if self.soil_rolling_radius_m is not None:
             _check_positive(owner, soil_rolling_radius_m=self.soil_rolling_radius_m)
+        if self.rolling_radius_m is not None:
+            _check_positive(owner, rolling_radius_m=self.rolling_radius_m)
 
 
 @dataclass(frozen=True)

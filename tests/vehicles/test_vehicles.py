@@ -23,9 +23,12 @@ def test_the_papers_numbers_are_in_the_presets():
     assert farm.counts_per_rad == 285.0 and farm.wheel_radius_nominal_m == 0.275
     assert [w.soil_rolling_radius_m for w in farm.wheels[:2]] == [0.283, 0.287]
     tracked = vehicle_by_name("tracked_patako")
-    assert tracked.track_width_m == 0.41 and tracked.track_length_m == 0.60
+    # Table 1's 0.60 m track wraps the sprocket and idler: it bears on the ground between their
+    # axles, 0.60 m minus one radius at each end.
+    r = tracked.wheel_radius_nominal_m
+    assert tracked.track_width_m == 0.41 and tracked.track_length_m == pytest.approx(0.60 - 2 * r)
     assert sum(w.contact_length_m for w in tracked.wheels if w.channel == "left") == \
-        pytest.approx(0.60)
+        pytest.approx(0.60 - 2 * r)
 
 
 def test_unknown_vehicle_lists_the_known_ones():

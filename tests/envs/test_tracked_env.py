@@ -1,0 +1,105 @@
+"""The tracked slope env with Yamauchi's controllers used as policies (``predict`` on the env).
+
+Both controllers are the Yamauchi §3 law with the gains the baseline uses for 5 cm/s
+(``slipenv.run.baseline_controller``): Eq. 10 with the observation's β̂ (feed-forward) and
+Eq. 9 with β = 0 (feedback), on the env's default observation (slip-compensated odometry).
+"""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import slipenv  # noqa: F401
+from controllers.observation import OBS_SLIP_ANGLE
+from controllers.yamauchi import YamauchiController
+from slipenv.run import baseline_controller
+
+ENV_ID = "slipenv/TrackedSlopeCircle-v0"
+FLAT_RIGID = dict(terrain="flat", soil="concrete")
+# Stated bounds on flat rigid ground, r = 0.25 m at 5 cm/s: mean |cross-track| under 5 cm
+# (a fifth of the radius), and never more than 20 cm.
+FLAT_MEAN_BOUND_M = 0.05
+FLAT_MAX_BOUND_M = 0.20
+
+
+def lap(feedforward: bool, seed: int, **env_kwargs) -> dict:
+    """One lap of the circle; true cross-track statistics and how it ended."""
+    env = gym.make(ENV_ID, **env_kwargs)
+    policy = baseline_controller(env, use_feedforward=feedforward)
+    obs, _ = env.reset(seed=seed)
+    policy.reset()
+    errors = []
+    while True:
+        action, _ = policy.predict(obs, deterministic=True)
+        obs, _, terminated, truncated, info = env.step(action)
+        errors.append(abs(info["cross_track_true_m"]))
+        if terminated or truncated:
+            break
+    env.close()
+    return {"mean": float(np.mean(errors)), "max": float(np.max(errors)),
+            "success": bool(info.get("is_success"))}
+
+
+def test_the_default_observation_is_slip_compensated_odometry_with_beta_hat():
+    env = gym.make(ENV_ID)
+    assert env.unwrapped.config.estimator == "slip_compensated"
+    obs, _ = env.reset(seed=0)
+    turn = np.array([0.05 / 0.3, math.radians(20.0) / math.radians(45.0)], dtype=np.float32)
+    for _ in range(40):
+        obs, _, _, _, info = env.step(turn)
+    env.close()
+    extras = info["estimator_extras"]
+    assert {"roll_rad", "angular_displacement_rad", "rotation_radius_m"} <= set(extras)
+    assert abs(extras["roll_rad"]) > math.radians(5.0)  # on the 15° side slope
+    assert obs[OBS_SLIP_ANGLE] != 0.0 and abs(obs[OBS_SLIP_ANGLE]) < 1.0
+
+
+@pytest.mark.parametrize("feedforward", [False, True], ids=["feedback", "feedforward"])
+def test_on_flat_rigid_ground_both_controllers_stay_within_the_stated_bound(feedforward):
+    result = lap(feedforward, seed=0, **FLAT_RIGID)
+    assert result["success"]
+    assert result["mean"] < FLAT_MEAN_BOUND_M
+    assert result["max"] < FLAT_MAX_BOUND_M
+
+
+def test_on_the_15_degree_slope_the_feedback_controller_completes_the_lap():
+    """The old failure (sliding out of the 0.5 m corridor half-way) is gone.
+
+    The feed-forward controller tracks closer on average (next test) but still grazes the
+    corridor edge near the end of the lap: see the closing note of issue 4.
+    """
+    result = lap(False, seed=0)
+    assert result["success"] and result["max"] < 0.5
+
+
+def test_on_the_15_degree_slope_feedforward_beats_feedback_on_every_seed():
+    for seed in (0, 1, 2):
+        assert lap(True, seed)["mean"] < lap(False, seed)["mean"]
+
+
+@pytest.mark.parametrize("path_kwargs", [
+    {"radius_m": -0.25, "speed_mps": 0.05},
+    {"radius_m": 0.25, "speed_mps": 0.0},
+], ids=["negative radius", "zero speed"])
+def test_a_path_that_makes_no_sense_is_a_clear_error(path_kwargs):
+    with pytest.raises(ValueError, match="radius_m|speed_mps"):
+        gym.make(ENV_ID, path_kwargs=path_kwargs)
+
+
+@pytest.mark.parametrize("gains", [
+    {"k_eta": -1.0}, {"k_phi": 0.0}, {"k_omega": float("nan")},
+], ids=["negative k_eta", "zero k_phi", "nan k_omega"])
+def test_gains_that_make_no_sense_are_a_clear_error(gains):
+    with pytest.raises(ValueError, match=next(iter(gains))):
+        YamauchiController(v_max_mps=0.3, omega_max_rps=0.8, dt_s=0.05, **gains)
+
+
+@pytest.mark.parametrize("args", [(0.0, 0.05), (0.3, 0.0), (0.3, -0.05)],
+                         ids=["zero pole", "zero speed", "negative speed"])
+def test_pole_placement_rejects_a_non_positive_pole_or_speed(args):
+    with pytest.raises(ValueError, match="pole_rps|speed_mps"):
+        YamauchiController.from_poles(*args, v_max_mps=0.3, omega_max_rps=0.8, dt_s=0.05)

@@ -1,0 +1,90 @@
+"""``slipenv reproduce yamauchi --quick``: the JSON the command writes, and what it shows.
+
+The quick run (fewer repetitions, the same experiments, about 30 s) is run once per module
+through the command line, as a user would.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from estimators.identification import SlipAngleModel
+from slipenv.cli import main
+from slipenv.envs.registration import yamauchi_observation
+from slipenv.experiments import yamauchi
+
+TILTS = {"0", "8", "15"}
+
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory):
+    out = tmp_path_factory.mktemp("yamauchi")
+    path = out / "metrics.json"
+    assert main(["reproduce", "yamauchi", "--quick", "--quiet", "--json", str(path),
+                 "--out", str(out)]) == 0
+    return json.loads(path.read_text()), out
+
+
+def test_the_json_has_the_promised_keys(quick):
+    result, _ = quick
+    m = result["metrics"]
+    assert set(m["endo_n"]) == TILTS
+    assert set(m["odometry_rmse_m"]) == {"gyrodometry", "endo", "slip_compensated"}
+    for law in ("feedback", "feedforward"):
+        assert {"mean_error_m", "rmse_m"} <= set(m["path_following"][law])
+    assert set(result["paper"]["endo_n"]) == TILTS
+    assert result["paper"]["odometry_improvement_vs_gyrodometry"] == 0.82
+
+
+def test_n_is_reported_per_tilt_with_a_confidence_interval(quick):
+    m = quick[0]["metrics"]
+    for tilt in TILTS:
+        lo, hi = m["endo_n_ci95"][tilt]
+        assert lo < m["endo_n"][tilt] < hi
+        assert 0.0 < m["endo_n"][tilt] < 1.5 and m["endo_n_samples"][tilt] > 100
+
+
+def test_the_regression_is_scored_only_on_runs_it_was_not_fitted_on(quick):
+    m = quick[0]["metrics"]
+    trained = set(m["slip_angle_model"]["train_runs"])
+    assert trained and not trained & set(m["held_out_runs"])
+    assert all(f"tilt{t}_" in " ".join(m["held_out_runs"]) for t in TILTS)
+
+
+def test_slip_compensation_improves_on_gyrodometry_on_held_out_runs(quick):
+    odo = quick[0]["metrics"]["odometry_rmse_m"]
+    assert odo["slip_compensated"] < odo["endo"] < odo["gyrodometry"]
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "paper: 82 % better; simulation about 40-55 %: on the slope Endo's n depends on the "
+    "turning direction (uphill or downhill) and Eq. 9 cannot carry the load-transfer part "
+    "of β (slipenv reproduce yamauchi; issue 4 closing note)"))
+def test_target_slip_compensated_rmse_is_at_most_0_4_of_gyrodometry(quick):
+    assert quick[0]["metrics"]["targets_met"]["slip_compensated_rmse_le_0.4_gyrodometry"]
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "paper: 9.1 -> 1.3 cm; simulation: feed-forward of the predicted β lowers the mean circle "
+    "error by about 20 %, not by half (tests/envs/test_tracked_env.py; issue 4 closing note)"))
+def test_target_feedforward_halves_the_feedback_error(quick):
+    assert quick[0]["metrics"]["targets_met"]["feedforward_mean_le_0.5_feedback"]
+
+
+def test_figures_and_the_fitted_model_are_saved(quick):
+    _, out = quick
+    for name in ("fig4_endo_n", "fig5_slip_angle", "fig6_odometry", "fig8_circle"):
+        assert (out / f"{name}.png").stat().st_size > 10_000
+    saved = json.loads((out / "slip_model.json").read_text())
+    model = SlipAngleModel.from_dict(saved["beta_model"])
+    assert len(model.coef) == 4 and saved["n"] > 0.0
+
+
+def test_the_shipped_model_is_what_the_tracked_env_observes():
+    kwargs = yamauchi_observation()
+    assert kwargs["estimator"] == "slip_compensated"
+    model = SlipAngleModel.from_dict(kwargs["estimator_kwargs"]["beta_model"])
+    assert model.train_runs and kwargs["estimator_kwargs"]["n"] > 0.0
+    assert yamauchi.MODEL_FILE.is_file()
