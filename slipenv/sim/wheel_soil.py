@@ -16,8 +16,8 @@ as in tyre models (Pacejka, Tyre and Vehicle Dynamics, §7.2.1):
 
 whose steady state is the kinematic slip (with one reference speed V for both components, so
 that (s, tan β) keeps the direction of the contact point's sliding velocity at large slip; at
-ordinary slip V = |r ω| ≈ |v| and tan β = v_lat/|v|). At standstill V = 0 and the state integrates the
-slip displacement, so a parked vehicle is held by a soil "spring" (the Janosi shear
+ordinary slip V = |r ω| ≈ |v| and tan β = v_lat/|v|). At standstill V = 0 and the state
+integrates the slip displacement, so a parked vehicle is held by a soil "spring" (the Janosi shear
 deformation) instead of creeping, and a wheel spinning at v = 0 reaches s = 1 with no
 division by zero. The update is backward Euler, unconditionally stable for this linear ODE,
 which keeps a light wheel smooth even when its spin time constant falls below the time step
