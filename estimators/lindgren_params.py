@@ -63,7 +63,10 @@ class LindgrenNoise:
     k_s_rel_var_per_m : float
         Growth of k_s variance per metre, relative to k_s² [1/m] (chosen: 1e-4, 1 %/√m).
     bearing_gate_prob : float
-        χ²(1) probability of the bearing validation gate (0.999: gate at NIS 10.8).
+        χ²(1) probability of the bearing validation gate (0.999: gate at NIS 10.8). 1 disables
+        the gate: nearest-innovation association alone, as in the paper (Lindgren §2.4). The
+        gate (not in the paper) guards against clutter, but a filter whose odometry is trusted
+        beyond its accuracy (scheme 3 on soil) then rejects the bearings that would correct it.
     max_slip : float
         Odometry updates with |T / k_s| above this are skipped (Eq. 24 is a small-slip model).
     sigma0_xy_m, sigma0_yaw_rad : float
@@ -113,6 +116,7 @@ class LindgrenNoise:
             value = getattr(self, f.name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"LindgrenNoise.{f.name} must be finite and > 0, got {value!r}")
-        for name in ("bearing_gate_prob", "max_slip"):
-            if getattr(self, name) >= 1.0:
-                raise ValueError(f"LindgrenNoise.{name} must be < 1")
+        if self.max_slip >= 1.0:
+            raise ValueError("LindgrenNoise.max_slip must be < 1")
+        if self.bearing_gate_prob > 1.0:
+            raise ValueError("LindgrenNoise.bearing_gate_prob must be <= 1 (1: no gate)")

@@ -42,7 +42,8 @@ def plot_paths(rec, runs: dict, circ: dict, out_png: str | FsPath) -> FsPath:
                 label=f"{name} estimate")
         dev = circ["mean_deviation_m"].get(name)
         err = circ["true_error_mean_m"][name]
-        note = f"true error {err:.3f} m" + ("" if dev is None else f", deviation {dev:.3f} m")
+        note = (f"clockwise arc: true error {err:.3f} m"
+                + ("" if dev is None else f", deviation from (a) {dev:.3f} m"))
         ax.set_title(f"{title}\n{note}", fontsize=10)
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel("x [m]")
@@ -53,8 +54,8 @@ def plot_paths(rec, runs: dict, circ: dict, out_png: str | FsPath) -> FsPath:
 
 
 def plot_dropout(rec, runs: dict, out_png: str | FsPath, cut_s: float) -> FsPath:
-    """Fig. 7: laser + odometry, laser cut at ``cut_s``; (a) no slip model, (b) slip model,
-    with the oracle (true R_w and k_s) beside it."""
+    """Fig. 7 for one drive: laser + odometry, laser cut at ``cut_s``; (a) no slip model,
+    (b) slip model, with the oracle (true R_w and k_s) beside it."""
     plt = _pyplot()
     k_cut = int(np.searchsorted(rec.t_s, cut_s))
     fig, axes = plt.subplots(1, 2, figsize=(13, 6))
