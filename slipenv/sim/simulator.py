@@ -8,6 +8,8 @@ and reports :class:`VehicleTruth`.
 from __future__ import annotations
 
 import math
+import os
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -109,7 +111,14 @@ class Simulator:
         self.substeps = int(round(ratio))
         self.dt_s = 1.0 / physics_hz
         self.control_dt_s = 1.0 / control_hz
+        if gui and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+            raise RuntimeError(
+                "render_mode='human' opens the PyBullet GUI, which needs a display (DISPLAY is "
+                "not set); use render_mode='rgb_array' on a headless machine"
+            )
         self.client = p.connect(p.GUI if gui else p.DIRECT)
+        if self.client < 0:
+            raise RuntimeError("could not connect to PyBullet" + (" GUI" if gui else ""))
         p.setGravity(0, 0, -GRAVITY_MPS2, physicsClientId=self.client)
         p.setTimeStep(self.dt_s, physicsClientId=self.client)
         self.terrain = build_terrain(terrain, self.client)

@@ -189,3 +189,9 @@ def test_reward_terms_are_reported_and_weighted_by_config():
         assert reward == pytest.approx(2.0 * info["reward_terms"]["cross_track"])
     finally:
         env.close()
+
+
+def test_human_rendering_without_a_display_is_a_clear_error(monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    with pytest.raises(RuntimeError, match="rgb_array"):
+        gym.make("slipenv/HuskySand-v0", render_mode="human")
