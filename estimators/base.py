@@ -13,6 +13,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from slipenv.angles import wrap_angle  # noqa: F401  (re-exported for the estimators)
 from slipenv.sensors.frame import SensorFrame
 
 
@@ -98,9 +99,6 @@ class Estimator(Protocol):
         ...
 
 
-def wrap_angle(angle_rad: float) -> float:
-    """Wrap an angle to [-π, π)."""
-    return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def check_frame_time(previous_t_s: float | None, frame: SensorFrame) -> float:

@@ -51,6 +51,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from slipenv.angles import wrap_angles  # noqa: F401  (part of this module's API)
+
 G_MPS2 = 9.80665  # standard gravity [m/s²]; Eq. 14 accelerations are in units of g
 
 IX, IY, ITH, IV, IOM, IVD, IOMD, IA1, IA2 = range(9)
@@ -84,9 +86,6 @@ class OracleSoil:
             object.__setattr__(self, name, value)
 
 
-def wrap_angles(angle_rad: np.ndarray | float) -> np.ndarray:
-    """Wrap angles element-wise to [-π, π) (vectorised :func:`estimators.base.wrap_angle`)."""
-    return np.mod(np.asarray(angle_rad, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
 
 
 # ---------------------------------------------------------------------------------------------

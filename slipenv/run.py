@@ -18,6 +18,7 @@ import numpy as np
 from controllers import controller_by_name
 from controllers.yamauchi import YamauchiController
 from estimators.dead_reckoning import DeadReckoning
+from slipenv.angles import wrap_angle
 from slipenv.envs.estimation import odometry_geometry
 
 
@@ -139,7 +140,7 @@ def summarize(rec: EpisodeRecord) -> dict[str, float]:
         "odometry_mean_error_m": float(np.mean(err)),
         "dead_reckoning_final_error_m": float(naive[-1]),
         "odometry_final_heading_error_deg": float(np.degrees(abs(
-            (rec.est_pose[-1, 2] - rec.true_pose[-1, 2] + math.pi) % (2 * math.pi) - math.pi))),
+            wrap_angle(rec.est_pose[-1, 2] - rec.true_pose[-1, 2])))),
         "return": float(np.sum(rec.rewards)),
     }
 

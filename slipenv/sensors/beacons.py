@@ -25,6 +25,8 @@ import math
 
 import numpy as np
 
+from slipenv.angles import wrap_angle, wrap_angles
+
 FIELD_HALF_SIZE_M = 15.0  # half the side of the default square field [m] (assumed)
 
 
@@ -143,13 +145,13 @@ class BeaconScanner:
         t1 = float(t_s)
         if not t1 > t0:
             raise ValueError(f"BeaconScanner.scan: t = {t1!r} s is not after {t0!r} s")
-        dyaw = (yaw_rad - yaw0 + math.pi) % (2.0 * math.pi) - math.pi
+        dyaw = wrap_angle(yaw_rad - yaw0)
         self._last = (t1, float(x_m), float(y_m), float(yaw_rad))
         dt = t1 - t0
         # g(t) = ψ(t) - φ(t), taken linear over the interval; hits where g = 2π m
         phi0 = self._body_bearings(x0, y0, yaw0)
         phi1 = self._body_bearings(float(x_m), float(y_m), yaw0 + dyaw)
-        dphi = (phi1 - phi0 + np.pi) % (2.0 * np.pi) - np.pi
+        dphi = wrap_angles(phi1 - phi0)
         g0 = self.head_phase_rad + 2.0 * math.pi * self.scan_rate_hz * t0 - phi0
         dg = 2.0 * math.pi * self.scan_rate_hz * dt - dphi
         m_lo = np.floor(g0 / (2.0 * np.pi)) + 1.0
@@ -162,7 +164,7 @@ class BeaconScanner:
         xs, ys = x0 + frac * (x_m - x0), y0 + frac * (y_m - y0)
         yaws = yaw0 + frac * dyaw
         dx, dy = self.beacons_xy[idx, 0] - xs, self.beacons_xy[idx, 1] - ys
-        bearing = (np.arctan2(dy, dx) - yaws + np.pi) % (2.0 * np.pi) - np.pi
+        bearing = wrap_angles(np.arctan2(dy, dx) - yaws)
         seen = (np.hypot(dx, dy) <= self.max_range_m) & (np.abs(bearing) <= 0.5 * self.fov_rad)
         bearing, times = bearing[seen], times[seen]
         bearing = bearing + rng.normal(0.0, math.sqrt(self.bearing_var_rad2), bearing.shape)
@@ -171,5 +173,5 @@ class BeaconScanner:
             bearing = np.concatenate([bearing, rng.uniform(-0.5, 0.5, k) * self.fov_rad])
             times = np.concatenate([times, t0 + dt * (1.0 - rng.uniform(0.0, 1.0, k))])
         order = np.argsort(times, kind="stable")
-        bearing = (bearing[order] + np.pi) % (2.0 * np.pi) - np.pi
+        bearing = wrap_angles(bearing[order])
         return bearing, times[order]

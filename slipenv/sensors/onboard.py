@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from slipenv.angles import wrap_angle
 from slipenv.sensors.frame import SensorFrame
 from slipenv.sensors.noise import G_MPS2, SensorNoise
 from slipenv.sim.simulator import VehicleTruth
@@ -77,8 +78,7 @@ class Compass:
         self.std = std_rad
 
     def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> float:
-        h = truth.yaw_rad + self.std * rng.standard_normal()
-        return (h + math.pi) % (2 * math.pi) - math.pi
+        return wrap_angle(truth.yaw_rad + self.std * rng.standard_normal())
 
 
 class SensorSuite:
