@@ -134,7 +134,8 @@ def _turning(seg: Segments) -> list[Param]:
 
 
 def _side_slip(seg: Segments) -> list[Param]:
-    return [Param("bpr", 0.0, -5.0, 5.0, 0.2), Param("b0", 0.0, -0.5, 0.5, 0.02)]
+    return [Param("bpr", 0.0, -5.0, 5.0, 0.2), Param("b0", 0.0, -0.5, 0.5, 0.02),
+            Param("bpt", 0.0, -20.0, 20.0, 0.5)]
 
 
 def _combined(seg: Segments) -> list[Param]:
@@ -208,7 +209,8 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
            contract={"endo_n": "endo_n", "turn_k": "turn_slip_scale"}),
     Effect("slope_side_slip", "slip angle driven by roll on a side slope (Yamauchi)",
            "pose", _side_slip, _needs_roll,
-           contract={"bpr": "beta_per_roll", "b0": "beta_offset_rad"}),
+           contract={"bpr": "beta_per_roll", "b0": "beta_offset_rad",
+                     "bpt": "beta_per_roll_yaw_rate_s"}),
     Effect("combined_slip", "longitudinal slip grows with slip angle (Reina Eq. 12)",
            "pose", _combined, _needs_beta,
            contract={"sx0": "s_x0", "kb": "k_beta", "b0c": "beta0_rad"}),

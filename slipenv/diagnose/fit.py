@@ -30,16 +30,19 @@ class Problem:
     seg : Segments
     heading_scale_m : float
         ℓ [m], the length a heading residual is multiplied by.
+    travel_m : float
+        Median distance the wheels cover in a segment [m].
     """
 
     seg: Segments
     heading_scale_m: float
+    travel_m: float
 
     @classmethod
     def from_segments(cls, seg: Segments) -> Problem:
         travel = np.abs(seg.dphi * seg.radius[:, None, :]).mean(axis=-1).sum(axis=1)
-        ell = 0.5 * float(np.median(travel))
-        return cls(seg, max(ell, float(np.median(seg.track))))
+        median = max(float(np.median(travel)), 1e-6)
+        return cls(seg, max(0.5 * median, float(np.median(seg.track))), median)
 
     def channel(self, effects: tuple[str, ...]) -> str:
         chans = {effect(e).channel for e in effects} or {"pose"}
@@ -122,7 +125,7 @@ def param_specs(effects: tuple[str, ...], seg: Segments) -> list[Param]:
 
 
 def fit(problem: Problem, effects: tuple[str, ...], index: np.ndarray | None = None,
-        start: dict[str, float] | None = None) -> Fit:
+        start: dict[str, float] | None = None, budget: int = 60) -> Fit:
     """Fit ``effects`` on the segments at ``index`` (all by default).
 
     Parameters
@@ -134,6 +137,8 @@ def fit(problem: Problem, effects: tuple[str, ...], index: np.ndarray | None = N
         Training segments.
     start : dict, optional
         Starting values overriding the effects' defaults (internal names).
+    budget : int
+        Function evaluations allowed per parameter.
     """
     seg = problem.seg if index is None else problem.seg.take(index)
     specs = param_specs(effects, seg)
@@ -145,6 +150,22 @@ def fit(problem: Problem, effects: tuple[str, ...], index: np.ndarray | None = N
     init = dict(start or {})
     if "soil_patch" in effects and not {"px", "py", "pr"} <= init.keys():
         init.update(patch_start(problem, seg, effects, init))
+    names_set = {sp.name for sp in specs}
+    if names_set & {"W", "r_L", "turn_k"}:
+        for key, value in linear_starts(seg).items():
+            if key in names_set and key not in init:
+                init[key] = value
+    if "turning_slip" in effects and "turn_k" not in init:
+        # the yaw loss is a track-width change to first order: κ0 = 1 - W/W_fit; Endo's
+        # exponent from a few starts (the split of the forward speed is not convex in n)
+        w_fit = linear_starts(seg)["W"]
+        init["turn_k"] = float(np.clip(1.0 - float(np.median(seg.track)) / w_fit, -0.8, 0.9))
+        best = None
+        for n0 in (0.3, 0.8, 1.5):  # short trial fits; the best one is refined
+            trial = fit(problem, effects, index, {**init, "endo_n": n0}, budget=8)
+            if best is None or trial.rmse < best.rmse:
+                best = trial
+        return fit(problem, effects, index, best.params, budget)
     lo = np.array([s.lower for s in specs])
     hi = np.array([s.upper for s in specs])
     x0 = np.clip([init.get(s.name, s.start) for s in specs], lo + 1e-12 * np.abs(lo),
@@ -155,9 +176,44 @@ def fit(problem: Problem, effects: tuple[str, ...], index: np.ndarray | None = N
         return problem.residuals(effects, dict(zip(names, x, strict=True)), seg)[mask].ravel()
 
     sol = least_squares(fun, x0, bounds=(lo, hi), x_scale=np.array([s.scale for s in specs]),
-                        method="trf", xtol=1e-10, ftol=1e-10, max_nfev=200 * len(specs))
+                        method="trf", xtol=1e-8, ftol=1e-8, max_nfev=budget * len(specs))
     cov = _cluster_covariance(problem, effects, seg, names, sol.x, sol.jac)
     return Fit(effects, names, sol.x, cov, float(np.sqrt(np.mean(sol.fun**2))), len(seg))
+
+
+def linear_starts(seg: Segments, window: int = 10) -> dict[str, float]:
+    """Closed-form starts for the track width and the side radii, from short windows.
+
+    Over windows of ``window`` samples with ground truth at both ends, the logged heading
+    change Δψ and along-track travel Δs are linear in 1/W and in (r_L, r_R):
+    Δψ W = r_R Δφ_R - r_L Δφ_L and Δs = (r_L Δφ_L + r_R Δφ_R)/2 (level-ground kinematics;
+    good enough to start from, and free of the local minima that wrapped headings give a
+    long segment whose nominal replay is far off).
+    """
+    rows = []
+    for j in range(len(seg)):
+        ok = np.flatnonzero(seg.gt_ok[j])
+        for a in ok[::window]:
+            b = a + window
+            if b >= seg.gt.shape[1] or not seg.gt_ok[j, b]:
+                continue
+            phi = seg.dphi[j, a:b].sum(axis=0)
+            dyaw = float(np.angle(np.exp(1j * (seg.gt[j, b, 2] - seg.gt[j, a, 2]))))
+            mid = seg.gt[j, a, 2] + 0.5 * dyaw
+            dx, dy = seg.gt[j, b, :2] - seg.gt[j, a, :2]
+            rows.append([phi[seg.sides == 0].mean(), phi[seg.sides == 1].mean(), dyaw,
+                         np.cos(mid) * dx + np.sin(mid) * dy])
+    r0, w0 = float(np.median(seg.radius)), float(np.median(seg.track))
+    if len(rows) < 5:
+        return {"W": w0, "r_L": r0, "r_R": r0}
+    phl, phr, dyaw, ds = np.array(rows).T
+    diff = r0 * (phr - phl)
+    inv_w = float(dyaw @ diff / max(diff @ diff, 1e-300))
+    w = float(np.clip(1.0 / inv_w, 0.25 * w0, 4.0 * w0)) if inv_w > 0 else w0
+    a = np.vstack([np.column_stack([0.5 * phl, 0.5 * phr]), np.column_stack([-phl, phr])])
+    r, *_ = np.linalg.lstsq(a, np.concatenate([ds, w * dyaw]), rcond=None)
+    r = np.clip(r, 0.6 * r0, 1.4 * r0)
+    return {"W": w, "r_L": float(r[0]), "r_R": float(r[1])}
 
 
 def _cluster_covariance(problem: Problem, effects, seg: Segments, names, x, jac) -> np.ndarray:

@@ -17,7 +17,9 @@ Per sample interval k (from sample k to k+1), with parameters ``p`` (internal na
 3. left/right means g_L, g_R; ``turning_slip`` moves them by Endo's split of a yaw discrepancy
    c = -κ (g_R - g_L): g_L -= f c, g_R += (1 - f) c (Yamauchi Eq. 7-8; ``estimators.endo``);
 4. forward travel ds = (g_L + g_R)/2, in-plane turn dθ = (g_R - g_L)/W (``track_width``: W);
-5. lateral travel dl = |ds| tan β with β = β_roll roll + β_0 (``slope_side_slip``, Yamauchi);
+5. lateral travel dl = |ds| tan β with β = (β_roll + β_turn |dθ/dt|) roll + β_0
+   (``slope_side_slip``; Yamauchi's regression on roll, with the turning term that makes a
+   skid-steer vehicle slide downhill while it scrubs round a turn);
 6. midpoint integration in the slope plane, mapped to the world by ``geometry.tilt_matrix``.
 
 The gyro channel replays heading from the gyro alone (``gyro_bias`` b subtracted), for
@@ -26,211 +28,20 @@ comparison with the ground-truth heading.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from estimators.endo import endo_left_share
 from slipenv.diagnose import geometry
-from slipenv.logs.log import Log
+from slipenv.diagnose.segments import (  # noqa: F401  (re-exported)
+    SUPPORTED_KINDS,
+    Segments,
+    build_segments,
+    check_logs,
+    wheel_sides,
+)
 
-SUPPORTED_KINDS = ("diff_drive", "skid_steer")
-MIN_SEGMENT_SAMPLES = 5
 _SOFTPLUS_RAD = 0.01  # [rad] corner width of the combined-slip hinge (Reina Eq. 12 smoothed)
 _ENDO_EPS_MPS = 1e-3  # [m/s] regularising speed in Endo's split (estimators.endo)
-_BETA_WINDOW_S = 0.25  # [s] half-window of the central difference giving the measured β
-
-
-def wheel_sides(wheels: list[str]) -> np.ndarray:
-    """Side of each wheel: 0 left, 1 right — from 'left'/'right' in the name, else by order.
-
-    ``log-format.md`` lists the left side first, so without names the first half is left.
-    """
-    names = [w.lower() for w in wheels]
-    if all(("left" in n) != ("right" in n) for n in names):
-        return np.array([0 if "left" in n else 1 for n in names])
-    if len(wheels) % 2:
-        raise ValueError(f"cannot tell left from right among wheels {wheels}: name them "
-                         "'...left...'/'...right...' or list an even number, left first")
-    half = len(wheels) // 2
-    return np.array([0] * half + [1] * half)
-
-
-def _fill(values: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """NaNs replaced by linear interpolation in time (held at the ends); all-NaN -> NaN."""
-    ok = np.isfinite(values)
-    if ok.all() or not ok.any():
-        return values.copy()
-    return np.interp(t, t[ok], values[ok])
-
-
-def _interval_mean(values: np.ndarray) -> np.ndarray:
-    """Mean of the two end samples of every interval (trapezoid rule)."""
-    return 0.5 * (values[1:] + values[:-1])
-
-
-@dataclass
-class Segments:
-    """Padded per-segment arrays of one or several logs (S segments, at most L samples).
-
-    Interval arrays have L - 1 entries per segment; padding has zero wheel motion, so the
-    replay stands still there, and ``gt_ok`` is False there.
-    """
-
-    t: np.ndarray  # (S, L) sample times [s], padded with the last time
-    dt: np.ndarray  # (S, L-1) [s]
-    dphi: np.ndarray  # (S, L-1, n_wheels) wheel rotation per interval [rad]
-    torque: np.ndarray | None  # (S, L-1, n_wheels) [N m] or None
-    roll: np.ndarray | None  # (S, L-1) logged roll [rad] or None
-    gyro: np.ndarray | None  # (S, L-1) gyro yaw rate [rad/s] or None
-    beta: np.ndarray  # (S, L-1) slip angle measured from ground truth [rad]
-    pos: np.ndarray  # (S, L-1, 2) ground-truth position at interval midpoints [m]
-    gt: np.ndarray  # (S, L, 3) ground truth x, y, yaw (NaN where missing)
-    gt_ok: np.ndarray  # (S, L) bool
-    tilt: np.ndarray  # (S, 3, 3) slope rotation of each segment's log
-    radius: np.ndarray  # (S, n_wheels) nominal radii [m]
-    track: np.ndarray  # (S,) nominal track width [m]
-    log_index: np.ndarray  # (S,) index of the segment's log
-    start: np.ndarray  # (S,) index of the first sample in its log
-    sides: np.ndarray  # (n_wheels,) 0 left / 1 right
-    wheels: list[str]
-    kind: str
-
-    def __len__(self) -> int:
-        return len(self.t)
-
-    def take(self, index: np.ndarray) -> Segments:
-        """The segments at ``index`` (same padding)."""
-        out = {}
-        for name, value in self.__dict__.items():
-            is_batch = isinstance(value, np.ndarray) and name != "sides"
-            out[name] = value[index] if is_batch else value
-        return Segments(**out)
-
-
-def segment_duration_s(logs: list[Log]) -> float:
-    """Segment length: about 16 segments per log, within 2-15 s [s]."""
-    span = min(float(log.t[-1] - log.t[0]) for log in logs)
-    return float(np.clip(span / 16.0, 2.0, 15.0))
-
-
-def check_logs(logs: list[Log]) -> None:
-    """Raise ValueError unless the logs can be replayed together (kind, wheels, ground truth)."""
-    if not logs:
-        raise ValueError("no logs to diagnose")
-    first = logs[0]
-    for log in logs:
-        where = log.path or "<log>"
-        if log.meta.kind not in SUPPORTED_KINDS:
-            raise ValueError(f"{where}: vehicle kind {log.meta.kind!r} is not supported by the "
-                             f"diagnosis (supported: {', '.join(SUPPORTED_KINDS)})")
-        if log.meta.kind != first.meta.kind or log.wheels != first.wheels:
-            raise ValueError(f"{where}: all logs diagnosed together must share the vehicle "
-                             f"kind and wheel names ({first.meta.kind}, {first.wheels})")
-        if not log.gt_mask.any():
-            raise ValueError(f"{where}: no ground-truth pose (gt_x, gt_y, gt_yaw) at any sample;"
-                             " the replay needs it to anchor and to compare")
-
-
-def build_segments(logs: list[Log], segment_s: float | None = None) -> Segments:
-    """Cut the logs into ground-truth-anchored segments and pad them into arrays.
-
-    Raises
-    ------
-    ValueError
-        If a log cannot be replayed (``check_logs``) or no segment of ``segment_s`` fits.
-    """
-    check_logs(logs)
-    seg_s = segment_s or segment_duration_s(logs)
-    wheels = logs[0].wheels
-    pieces = []
-    for li, log in enumerate(logs):
-        arrays = _log_arrays(log)
-        for a, b in log.segment_bounds(seg_s):
-            if b - a >= MIN_SEGMENT_SAMPLES and arrays["gt_ok"][a:b].sum() >= 2:
-                pieces.append((li, a, b, arrays))
-    if not pieces:
-        raise ValueError(f"no segment of {seg_s:.1f} s with ground truth at both ends fits in "
-                         "the log(s); the log is too short or its ground truth too sparse")
-    n_w = len(wheels)
-    length = max(b - a for _, a, b, _ in pieces)
-    s_count = len(pieces)
-    has_torque = all(p[3]["torque"] is not None for p in pieces)
-    has_roll = all(p[3]["roll"] is not None for p in pieces)
-    has_gyro = all(p[3]["gyro"] is not None for p in pieces)
-    t = np.zeros((s_count, length))
-    dphi = np.zeros((s_count, length - 1, n_w))
-    torque = np.zeros((s_count, length - 1, n_w)) if has_torque else None
-    roll = np.zeros((s_count, length - 1)) if has_roll else None
-    gyro = np.zeros((s_count, length - 1)) if has_gyro else None
-    beta = np.zeros((s_count, length - 1))
-    pos = np.zeros((s_count, length - 1, 2))
-    gt = np.full((s_count, length, 3), np.nan)
-    gt_ok = np.zeros((s_count, length), dtype=bool)
-    for j, (_, a, b, arr) in enumerate(pieces):
-        n = b - a
-        t[j, :n], t[j, n:] = arr["t"][a:b], arr["t"][b - 1]
-        dphi[j, :n - 1] = arr["dphi"][a:b - 1]
-        beta[j, :n - 1] = arr["beta"][a:b - 1]
-        pos[j, :n - 1] = arr["pos"][a:b - 1]
-        pos[j, n - 1:] = arr["pos"][b - 2]
-        gt[j, :n] = arr["gt"][a:b]
-        gt_ok[j, :n] = arr["gt_ok"][a:b]
-        for name, dest in (("torque", torque), ("roll", roll), ("gyro", gyro)):
-            if dest is not None:
-                dest[j, :n - 1] = arr[name][a:b - 1]
-    return Segments(
-        t=t, dt=np.diff(t, axis=1), dphi=dphi, torque=torque, roll=roll, gyro=gyro, beta=beta,
-        pos=pos, gt=gt, gt_ok=gt_ok,
-        tilt=np.stack([p[3]["tilt"] for p in pieces]),
-        radius=np.stack([np.full(n_w, logs[p[0]].meta.wheel_radius_m) for p in pieces]),
-        track=np.array([logs[p[0]].meta.track_width_m for p in pieces]),
-        log_index=np.array([p[0] for p in pieces]), start=np.array([p[1] for p in pieces]),
-        sides=wheel_sides(wheels), wheels=list(wheels), kind=logs[0].meta.kind,
-    )
-
-
-def _log_arrays(log: Log) -> dict:
-    """Per-interval regressors of one log (see ``Segments``)."""
-    t = log.t
-    tilt = geometry.tilt_matrix(log.meta.slope_deg, log.meta.slope_downhill_azimuth_deg)
-    gt = log.ground_truth()
-    ok = log.gt_mask
-    out: dict = {"t": t, "tilt": tilt, "gt": gt, "gt_ok": ok,
-                 "dphi": np.diff(log.wheel_angles(), axis=0)}
-    cols = [f"torque_{w}" for w in log.wheels]
-    out["torque"] = (np.column_stack([_interval_mean(_fill(log.signals[c], t)) for c in cols])
-                     if all(log.has(c) for c in cols) else None)
-    out["roll"] = _interval_mean(_fill(log.signals["roll"], t)) if log.has("roll") else None
-    out["gyro"] = _interval_mean(_fill(log.signals["gyro_z"], t)) if log.has("gyro_z") else None
-    x = np.interp(t, t[ok], gt[ok, 0])
-    y = np.interp(t, t[ok], gt[ok, 1])
-    out["pos"] = np.column_stack([_interval_mean(x), _interval_mean(y)])
-    out["beta"] = _measured_beta(t, x, y, np.interp(t, t[ok], np.unwrap(gt[ok, 2])), tilt)
-    return out
-
-
-def _measured_beta(t, x, y, yaw, tilt) -> np.ndarray:
-    """Body slip angle atan2(V_y, |V_x|) from ground-truth velocity, per interval [rad].
-
-    Velocity by central differences over ±``_BETA_WINDOW_S``, expressed in the slope plane and
-    rotated into the body; 0 where the vehicle moves slower than a tenth of its median speed.
-    """
-    n = len(t)
-    dt_med = float(np.median(np.diff(t))) if n > 1 else 1.0
-    h = max(1, int(round(_BETA_WINDOW_S / dt_med)))
-    lo, hi = np.maximum(np.arange(n) - h, 0), np.minimum(np.arange(n) + h, n - 1)
-    span = np.maximum(t[hi] - t[lo], 1e-9)
-    vx, vy = (x[hi] - x[lo]) / span, (y[hi] - y[lo]) / span
-    inv = np.linalg.inv(tilt[:2, :2])
-    vu, vv = inv[0, 0] * vx + inv[0, 1] * vy, inv[1, 0] * vx + inv[1, 1] * vy
-    theta = geometry.heading_from_yaw(yaw, tilt)
-    c, s = np.cos(theta), np.sin(theta)
-    v_long, v_lat = c * vu + s * vv, -s * vu + c * vv
-    speed = np.hypot(v_long, v_lat)
-    moving = speed > 0.1 * max(float(np.median(speed)), 1e-6)
-    beta = np.where(moving, np.arctan2(v_lat, np.abs(v_long)), 0.0)
-    return _interval_mean(beta)
 
 
 def _side_param(p: dict, base: str, default: np.ndarray | float) -> np.ndarray:
@@ -293,7 +104,8 @@ def simulate(seg: Segments, p: dict) -> np.ndarray:
     du, dv = ds * np.cos(mid), ds * np.sin(mid)
     if "bpr" in p:
         roll = seg.roll if seg.roll is not None else _geometric_roll(mid, seg.tilt)
-        dl = np.abs(ds) * np.tan(p["bpr"] * roll + p["b0"])
+        turn = np.abs(dtheta) / np.maximum(seg.dt, 1e-9)
+        dl = np.abs(ds) * np.tan(roll * (p["bpr"] + p.get("bpt", 0.0) * turn) + p["b0"])
         du, dv = du - dl * np.sin(mid), dv + dl * np.cos(mid)
     return _to_world(seg, du, dv, theta)
 

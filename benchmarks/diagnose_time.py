@@ -1,0 +1,47 @@
+"""Wall time of ``slipenv diagnose`` on a 5-minute, 20 Hz log (JSON + full human report).
+
+Generates the heaviest kind of log the generator makes — a skid-steer vehicle with turning
+slip and every optional column except torque, or a differential-drive one with torque (which
+brings the soil-patch search) — writes it, and times the command line end to end, PyBullet
+replay for the report included. Limit the process to 2 cores to match the requirement, e.g.
+``taskset -c 0,1 python benchmarks/diagnose_time.py``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+import time
+from pathlib import Path
+
+from slipenv.cli import main as slipenv_main
+from slipenv.diagnose.synth import generate
+from slipenv.logs import write_log
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--duration", type=float, default=300.0, help="log length [s]")
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args(argv)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    print(f"{cores} core(s) available")
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for effect, kind in (("turning_slip", "skid_steer"), ("soil_patch", "diff_drive")):
+            synth = generate(args.seed, effect, kind, duration_s=args.duration)
+            folder = write_log(synth.log, Path(tmp) / effect)
+            start = time.perf_counter()
+            code = slipenv_main(["diagnose", str(folder), "--json", str(Path(tmp) / "d.json"),
+                                 "--report", str(Path(tmp) / f"report_{effect}"), "--quiet"])
+            rows.append((effect, kind, len(synth.log), time.perf_counter() - start, code))
+    print("\n| log | samples | slipenv diagnose (JSON + report) |\n|---|---|---|")
+    for effect, kind, n, seconds, code in rows:
+        print(f"| {kind}, hidden {effect}, {args.duration / 60:g} min at 20 Hz | {n} | "
+              f"{seconds:.1f} s{'' if code == 0 else f' (exit {code})'} |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

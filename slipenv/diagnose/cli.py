@@ -1,0 +1,103 @@
+"""``slipenv diagnose LOG_DIR [--json PATH] [--report DIR] [--seed N] [--quiet]``.
+
+``LOG_DIR`` is one slipenv-log/1 folder, or a folder of them (diagnosed together: one vehicle,
+several runs; the held-out comparison then predicts each run with models fitted on other
+runs). Logs without any ground-truth pose get the proprioceptive analysis of
+``proprio.py`` instead (yaw rate against wheel speeds with the gyro as reference).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from slipenv.logs.errors import LogFormatError
+from slipenv.logs.io import META_FILE, read_log
+from slipenv.logs.log import GT_COLUMNS, Log
+
+
+def load_logs(path: str | Path, require_ground_truth: bool = True) -> list[Log]:
+    """The log at ``path``, or every log folder directly inside it (sorted by name).
+
+    Raises
+    ------
+    LogFormatError
+        If ``path`` is not a folder, holds no log, or a log breaks the contract.
+    """
+    folder = Path(path)
+    if not folder.is_dir():
+        raise LogFormatError(folder, "no such log folder")
+    if (folder / META_FILE).is_file():
+        return [read_log(folder, require_ground_truth=require_ground_truth)]
+    subs = sorted(p for p in folder.iterdir() if (p / META_FILE).is_file())
+    if not subs:
+        raise LogFormatError(folder, "not a log folder (no meta.json) and no log folders in it")
+    return [read_log(p, require_ground_truth=require_ground_truth) for p in subs]
+
+
+def _has_truth(folder: Path) -> bool:
+    """True unless every log under ``folder`` lacks all ground-truth columns."""
+    logs = load_logs(folder, require_ground_truth=False)
+    return any(all(log.has(c) for c in GT_COLUMNS) for log in logs)
+
+
+def diagnose(logs: list[Log], where: str, *, progress: bool = False) -> tuple[dict, object]:
+    """Run the diagnosis on ``logs``; (JSON report, context for the human report)."""
+    from slipenv.diagnose.fit import Problem
+    from slipenv.diagnose.replay import build_segments
+    from slipenv.diagnose.report import build_report
+    from slipenv.diagnose.select import select
+
+    problem = Problem.from_segments(build_segments(logs))
+    sel = select(problem, progress=progress)
+    return build_report(sel, problem, logs, where), (sel, problem)
+
+
+def main(args) -> int:
+    """Entry point of ``slipenv diagnose`` (see ``slipenv.cli``); returns the exit code."""
+    from slipenv.diagnose import report as rep
+
+    start = time.perf_counter()
+    folder = Path(args.log_dir)
+    quiet = bool(getattr(args, "quiet", False))
+    if folder.is_dir() and not _has_truth(folder):
+        from slipenv.diagnose import proprio
+
+        result = proprio.analyse(load_logs(folder, require_ground_truth=False), str(folder))
+        if args.json:
+            rep.write_json(result, args.json)
+        if args.report:
+            proprio.write_report(args.report, result)
+        print(proprio.summary(result))
+        return 0
+    logs = load_logs(folder)
+    report, (sel, problem) = diagnose(logs, str(folder), progress=not quiet)
+    sim = None
+    if args.report:
+        from slipenv.diagnose.simreplay import pybullet_overlay
+
+        sim = pybullet_overlay(logs[0], sel, problem, seed=int(getattr(args, "seed", 0) or 0),
+                               progress=not quiet)
+        if sim is not None:
+            report["pybullet_replay"] = {k: v for k, v in sim.items()
+                                         if k in ("rmse_nominal_m", "rmse_extended_m",
+                                                  "segments", "note")}
+    if args.json:
+        rep.write_json(report, args.json)
+    if args.report:
+        rep.write_human_report(args.report, report, sel, problem, sim)
+    print(summary(report, time.perf_counter() - start))
+    return 0
+
+
+def summary(report: dict, seconds: float | None = None) -> str:
+    """A few lines for the terminal."""
+    g = report["gain"]
+    lines = [f"cause: {report['cause']}"
+             + (f" (also: {', '.join(report['also'])})" if report["also"] else "")]
+    lines += [f"  {k} = {v[0]:.6g} ± {v[1]:.2g}" for k, v in report["parameters"].items()]
+    lines.append(f"held-out {g['metric']}: {g['before']:.4g} -> {g['after']:.4g} "
+                 f"({100 * g['relative']:.1f} % better)")
+    if seconds is not None:
+        lines.append(f"({report['segments']['count']} segments, {seconds:.1f} s)")
+    return "\n".join(lines)

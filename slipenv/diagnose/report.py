@@ -1,0 +1,275 @@
+"""The diagnosis report: JSON (``log-format.md``, ``slipenv-diagnosis/1``) and a human report.
+
+The human report is a folder with ``report.md`` (read it first: the cause, its parameters, the
+held-out gain, the candidates) and plots: ``overlay.png`` (trajectory: logged, nominal replay,
+extended replay), ``residuals_time.png`` (held-out errors over time), ``regressors.png``
+(per-window residuals against torque, yaw rate, roll, pitch, speed, position), ``candidates.png``
+(held-out error of every effect) and, when the PyBullet replay ran, ``pybullet.png``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from estimators.consistency import consistency_report
+from slipenv.diagnose import geometry, replay
+from slipenv.diagnose.effects import EFFECTS, effect
+from slipenv.diagnose.fit import Problem
+from slipenv.diagnose.select import ALPHA, MIN_DRIFT, MIN_GAIN, N_FOLDS, Selection
+from slipenv.logs.log import Log
+
+FORMAT = "slipenv-diagnosis/1"
+_WINDOW_S = 0.5  # [s] window of the per-window residuals plotted against regressors
+
+
+def _rmse(pred: np.ndarray, seg: replay.Segments, pos: bool) -> float:
+    if pos:
+        err = (pred[..., :2] - seg.gt[..., :2])[seg.gt_ok]
+        return float(np.sqrt(np.mean(np.sum(err**2, axis=-1))))
+    yaw = pred[..., 2] if pred.ndim == 3 else pred
+    return float(np.sqrt(np.mean(replay.heading_residuals(seg, yaw)[seg.gt_ok] ** 2)))
+
+
+def gains(sel: Selection, problem: Problem) -> dict[str, Any]:
+    """Held-out error before/after for the pose channel and, with a gyro, the gyro channel."""
+    seg = problem.seg
+    out: dict[str, Any] = {}
+    base = sel.baseline["pose"].pred
+    after = sel.final["pose"].pred if "pose" in sel.final else base
+    for name, pos in (("position_rmse_m", True), ("heading_rmse_rad", False)):
+        b, a = _rmse(base, seg, pos), _rmse(after, seg, pos)
+        out[name] = {"metric": name, "before": b, "after": a,
+                     "relative": 1.0 - a / b if b > 0 else 0.0, "evaluated_on": "held-out"}
+    if "gyro" in sel.baseline:
+        b = _rmse(sel.baseline["gyro"].pred, seg, False)
+        a = _rmse(sel.final["gyro"].pred, seg, False) if "gyro" in sel.final else b
+        out["gyro_heading_rmse_rad"] = {"metric": "gyro_heading_rmse_rad", "before": b,
+                                        "after": a, "relative": 1.0 - a / b if b > 0 else 0.0,
+                                        "evaluated_on": "held-out"}
+    return out
+
+
+def consistency(sel: Selection, problem: Problem) -> dict[str, Any]:
+    """NIS and whiteness of the segment-end pose residuals, nominal vs extended.
+
+    Each segment's last ground-truth residual, in the frame of its starting pose (along,
+    across), is one innovation-like sample; segments are in time order. The covariance S is
+    that of the extended model's held-out residuals (the noise the diagnosis leaves
+    unexplained), so the extended model's time-averaged NIS is 2 by construction and the
+    nominal model's says how many times larger its errors are; the autocorrelation over
+    consecutive segments shows a systematic (not white) residual.
+    """
+    seg = problem.seg
+    last = np.array([np.flatnonzero(row)[-1] for row in seg.gt_ok])
+    idx = np.arange(len(seg))
+    yaw0 = seg.gt[:, 0, 2]
+    out: dict[str, Any] = {}
+    ends = {}
+    for name, cand in (("nominal", sel.baseline["pose"]), ("extended", sel.final.get("pose"))):
+        pred = (cand or sel.baseline["pose"]).pred
+        e = pred[idx, last, :2] - seg.gt[idx, last, :2]
+        c, s = np.cos(yaw0), np.sin(yaw0)
+        ends[name] = np.column_stack([c * e[:, 0] + s * e[:, 1], -s * e[:, 0] + c * e[:, 1]])
+    cov = np.cov(ends["extended"].T) + np.eye(2) * 1e-12
+    lags = range(1, max(2, min(5, len(seg) // 4) + 1))
+    for name, y in ends.items():
+        rep = consistency_report((y, np.repeat(cov[None], len(y), axis=0)), name, lags=lags)
+        out[name] = {"nis_mean": rep.nis_mean, "nis_band_95": list(rep.band_exact),
+                     "autocorrelation_lags": rep.lags.tolist(), "autocorrelation": rep.rho.tolist(),
+                     "autocorrelation_band": 1.96 / math.sqrt(rep.n_samples),
+                     "mean_end_error_m": np.mean(y, axis=0).tolist()}
+    return out
+
+
+def build_report(sel: Selection, problem: Problem, logs: list[Log], where: str) -> dict:
+    """The JSON report of ``log-format.md`` plus extra keys (effects, thresholds, checks)."""
+    seg = problem.seg
+    g = gains(sel, problem)
+    params: dict[str, list[float]] = {}
+    per_effect: dict[str, dict] = {}
+    for fit in sel.fits.values():
+        params.update(fit.report(seg))
+        for name in fit.effects:
+            per_effect[name] = effect(name).to_contract(fit.params, fit.se, seg.wheels, seg.sides)
+    chosen = [sel.cause, *sel.also] if sel.cause != "none" else []
+    only_gyro = bool(chosen) and all(effect(e).channel == "gyro" for e in chosen)
+    gain = dict(g["gyro_heading_rmse_rad"] if only_gyro else g["position_rmse_m"])
+    candidates = []
+    for c in sel.candidates:
+        entry: dict[str, Any] = {"cause": c.name}
+        if c.untestable:
+            entry.update(score=None, gain_relative=None, untestable=c.untestable)
+        else:
+            entry.update(score=c.error_ratio, gain_relative=c.gain_relative, p_value=c.p_value,
+                         drift=c.drift, significant=c.significant, n_params=c.n_params,
+                         channel=c.channel)
+        candidates.append(entry)
+    return {
+        "format": FORMAT, "log": where, "cause": sel.cause, "also": sel.also,
+        "parameters": params, "gain": gain, "candidates": candidates,
+        "effects": per_effect,
+        "gains": g,
+        "nominal": {"wheel_radius_m": float(np.median(seg.radius)),
+                    "track_width_m": float(np.median(seg.track))},
+        "vehicle_kind": seg.kind, "wheels": seg.wheels,
+        "segments": {"count": len(seg), "duration_s": float(np.median(seg.t[:, -1] - seg.t[:, 0])),
+                     "folds": int(sel.folds.max()) + 1,
+                     "fold_by": "log" if int(seg.log_index.max()) > 0 else "interleaved segments"},
+        "consistency": consistency(sel, problem),
+        "thresholds": {"alpha": ALPHA, "min_gain": MIN_GAIN, "min_drift": MIN_DRIFT,
+                       "n_folds": N_FOLDS},
+        "score": "held-out mean squared error over the nominal model's (lower is better)",
+        "logs": [str(log.path) if log.path else "<memory>" for log in logs],
+    }
+
+
+def write_json(report: dict, path: str | Path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(_plain(report), indent=2, allow_nan=False) + "\n")
+    return path
+
+
+def _plain(value: Any) -> Any:
+    """JSON-safe copy: numpy scalars to floats, NaN/inf to None."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def window_residuals(problem: Problem) -> dict[str, np.ndarray]:
+    """Nominal-model residual rates over ~0.5 s windows, and the regressors at each window.
+
+    Per window: along-track residual divided by the nominal travel (an apparent slip),
+    yaw-rate residual, across-track residual over travel (an apparent slip angle); and the
+    window's torque, nominal yaw rate, roll, pitch, speed and position (roll and pitch from
+    the declared slope and the logged heading when not logged).
+    """
+    seg = problem.seg
+    dt = float(np.median(seg.dt[seg.dt > 0]))
+    w = max(1, int(round(_WINDOW_S / dt)))
+    rows: list[list[float]] = []
+    d = seg.radius[:, None, :] * seg.dphi
+    left, right = d[..., seg.sides == 0].mean(-1), d[..., seg.sides == 1].mean(-1)
+    ds, dth = 0.5 * (left + right), (right - left) / seg.track[:, None]
+    tq = seg.torque.mean(-1) if seg.torque is not None else np.full(ds.shape, np.nan)
+    theta = geometry.heading_from_yaw(seg.gt[:, :-1, 2], seg.tilt[:, None])
+    roll = seg.roll if seg.roll is not None else geometry.roll_from_heading(theta,
+                                                                            seg.tilt[:, None])
+    pitch = seg.pitch if seg.pitch is not None else geometry.pitch_from_heading(
+        theta, seg.tilt[:, None])
+    for j in range(len(seg)):
+        ok = np.flatnonzero(seg.gt_ok[j])
+        for a in ok[:-1]:
+            b = a + w
+            if b >= seg.gt.shape[1] or not seg.gt_ok[j, b] or (a - ok[0]) % w:
+                continue
+            yaw = np.unwrap(seg.gt[j, a:b + 1, 2])
+            travel, turn = ds[j, a:b].sum(), dth[j, a:b].sum()
+            dx, dy = seg.gt[j, b, :2] - seg.gt[j, a, :2]
+            mid = 0.5 * (yaw[0] + yaw[-1])
+            along, across = math.cos(mid) * dx + math.sin(mid) * dy, -math.sin(mid) * dx + \
+                math.cos(mid) * dy
+            span = seg.t[j, b] - seg.t[j, a]
+            if abs(travel) < 1e-6 or span <= 0:
+                continue
+            rows.append([(travel - along) / abs(travel), (yaw[-1] - yaw[0] - turn) / span,
+                         across / abs(travel), _mean(tq[j, a:b]), turn / span,
+                         _mean(roll[j, a:b]), _mean(pitch[j, a:b]), travel / span,
+                         *seg.pos[j, a]])
+    names = ["slip", "yaw_rate_residual", "slip_angle", "torque", "yaw_rate", "roll", "pitch",
+             "speed", "x", "y"]
+    arr = np.array(rows) if rows else np.zeros((0, len(names)))
+    return {n: arr[:, k] for k, n in enumerate(names)}
+
+
+def _mean(x: np.ndarray) -> float:
+    """Mean of the finite values (NaN, without a warning, when there are none)."""
+    x = x[np.isfinite(x)]
+    return float(x.mean()) if x.size else float("nan")
+
+
+def write_human_report(folder: str | Path, report: dict, sel: Selection, problem: Problem,
+                       sim_overlay: dict | None = None) -> Path:
+    """Plots and ``report.md`` in ``folder`` (created)."""
+    from slipenv.diagnose import plots
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    figs = {"overlay": plots.overlay(folder / "overlay.png", sel, problem),
+            "residuals_time": plots.residuals_time(folder / "residuals_time.png", sel, problem),
+            "regressors": plots.regressors(folder / "regressors.png", window_residuals(problem)),
+            "candidates": plots.candidates(folder / "candidates.png", sel)}
+    if sim_overlay:
+        figs["pybullet"] = plots.pybullet(folder / "pybullet.png", sim_overlay)
+    (folder / "report.md").write_text(markdown(report, figs, sim_overlay), encoding="utf-8")
+    return folder
+
+
+def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
+    """The text of ``report.md``."""
+    g = report["gain"]
+    lines = [f"# Diagnosis of `{report['log']}`", ""]
+    cause = report["cause"]
+    if cause == "none":
+        lines += ["**Cause: none** — no effect of the vocabulary improves the held-out "
+                  "replay enough to count (see the thresholds below); the nominal model "
+                  "explains the log up to noise.", ""]
+    else:
+        also = f" (also: {', '.join(report['also'])})" if report["also"] else ""
+        lines += [f"**Cause: {cause}**{also} — {EFFECTS[cause].meaning}.", ""]
+        lines += ["| parameter | value | standard error |", "|---|---|---|"]
+        lines += [f"| `{k}` | {v[0]:.6g} | {v[1]:.2g} |" for k, v in report["parameters"].items()]
+        lines += [""]
+    lines += [f"Held-out {g['metric']}: **{g['before']:.4g} → {g['after']:.4g}** "
+              f"({100 * g['relative']:.1f} % better), each segment predicted by a model "
+              "fitted without it.", ""]
+    seg = report["segments"]
+    lines += [f"{seg['count']} segments of about {seg['duration_s']:.1f} s, each replayed from "
+              f"the logged pose at its start; {seg['folds']} folds ({seg['fold_by']}).", "",
+              "## Candidates", "",
+              "| effect | held-out error ratio | gain | p | drift | significant |",
+              "|---|---|---|---|---|---|"]
+    for c in report["candidates"]:
+        if c.get("untestable"):
+            lines.append(f"| {c['cause']} | – | – | – | – | not testable: {c['untestable']} |")
+        else:
+            lines.append(f"| {c['cause']} | {c['score']:.3f} | {100 * c['gain_relative']:.0f} % "
+                         f"| {c['p_value']:.2g} | {c['drift']:.4f} | "
+                         f"{'yes' if c['significant'] else 'no'} |")
+    t = report["thresholds"]
+    lines += ["", f"Significant = one-sided paired sign-flip p < {t['alpha']}, held-out mean "
+              f"squared error down by ≥ {100 * t['min_gain']:.0f} %, and a material drift "
+              f"(≥ {100 * t['min_drift']:.1f} % of the distance a segment covers).", "",
+              "## Consistency of the segment-end residuals", "",
+              "| model | time-averaged NIS | 95 % band | lag-1 autocorrelation | band |",
+              "|---|---|---|---|---|"]
+    for name, c in report["consistency"].items():
+        lines.append(f"| {name} | {c['nis_mean']:.2f} | {c['nis_band_95'][0]:.2f}–"
+                     f"{c['nis_band_95'][1]:.2f} | {c['autocorrelation'][0]:+.2f} | "
+                     f"±{c['autocorrelation_band']:.2f} |")
+    lines += ["", "S is the extended model's residual covariance: the nominal model's NIS says "
+              "how many times its end errors exceed what remains unexplained.", "",
+              "## Plots", ""]
+    captions = {"overlay": "logged path, nominal replay and extended replay (held-out)",
+                "residuals_time": "held-out position and heading error over time",
+                "regressors": "nominal residuals per 0.5 s window against candidate regressors",
+                "candidates": "held-out error of every effect relative to the nominal model",
+                "pybullet": "PyBullet replay (physics, logged wheel motion) before/after"}
+    lines += [f"- `{p.name}` — {captions[k]}" for k, p in figs.items()]
+    if sim:
+        lines += ["", "## PyBullet replay", "", sim.get("note", ""), "",
+                  f"Position RMSE over the replayed segments: nominal world "
+                  f"{sim['rmse_nominal_m']:.4g} m, extended world {sim['rmse_extended_m']:.4g} m."]
+    return "\n".join(lines) + "\n"

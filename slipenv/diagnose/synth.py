@@ -1,0 +1,378 @@
+"""Hidden-effect logs from the PyBullet simulation, for testing the diagnosis against physics.
+
+:func:`generate` drives a simulated vehicle (Lindgren's ``farm_2wd`` for ``diff_drive``, the
+symmetric four-wheel :func:`skid4` for ``skid_steer``) between random waypoints on rigid,
+level or sloped ground, and exports the run as a slipenv-log/1 log whose ``meta.json`` holds
+the *nominal* model. One effect of random size is hidden in the *physics* of the world (never
+in the kinematic model the diagnosis fits), or none:
+
+=============== ==== =========================================================================
+effect          kind what changes in the simulated world
+=============== ==== =========================================================================
+rolling_radius  both each wheel's effective rolling radius 1-4 % off (``apply_model``)
+track_width     diff wheels moved apart or together by 5-15 % (``apply_model``)
+track_width     skid side stiffness ×1.5-3 or ÷1.5-3: the turning resistance that sets a
+                     skid-steer's effective width (its wheel spacing barely does)
+torque_slip     diff longitudinal slip stiffness set to k_s, 2-6 % slip at the typical torque
+turning_slip    skid softer ground: longitudinal stiffness 3-10 % of the rigid ground's, the
+                     tracks slip in turns (no torque column: with one it is torque slip)
+slope_side_slip skid an 8-15° side slope with soft side stiffness (×0.15-0.4); the nominal
+                     width is calibrated on level ground of the same soil
+soil_patch      diff a disc of softer soil (radius 35-50 % of the arena's half-size, on the
+                     route's focus), 2-5 % slip inside at the typical torque (``apply_model``)
+gyro_bias       both a yaw-gyro offset of 0.005-0.03 rad/s (``apply_model``)
+=============== ==== =========================================================================
+
+Why some effects are hidden on one kind only: on a skid-steer vehicle a softer longitudinal
+law shows mainly in turns (the scrub torque dominates and the slip follows the combined law),
+so torque slip and soil patches are hidden on the differential-drive vehicle; a
+differential-drive vehicle with castors on a soft side slope yaws downhill (the castors carry
+no side force), which is not Yamauchi's side slip, so slopes with side slip are skid-steer
+only. ``combined_slip`` is not generated: on these vehicles a slip angle comes only with side
+slip, so it never appears alone. About 30 % of the differential-drive logs stand on a 5-12°
+slope whatever the effect.
+
+A skid-steer vehicle never turns as its wheel spacing says (the wheels scrub), so its nominal
+track width is the *effective* one, fitted on a long run of the clean world — as an operator
+would calibrate it. True parameters: a gyro offset is taken one to one; every other effective
+value is shifted a little by the vehicle's own dynamics, so it is fitted on a long noise-free
+calibration run of the same world (``SynthLog.truth``); the values set in the physics are in
+``SynthLog.world``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from slipenv.diagnose.extension import apply_model
+from slipenv.diagnose.simreplay import rigid_ground
+from slipenv.envs.config import SlipEnvConfig
+from slipenv.envs.factory import make_force_model, make_soil_map, make_vehicle
+from slipenv.logs.export import LogRecorder, meta_for
+from slipenv.logs.log import Log
+from slipenv.sensors.noise import SensorNoise
+from slipenv.sensors.onboard import SensorSuite
+from slipenv.sim.simulator import Simulator
+from slipenv.terrain.terrain import TerrainSpec
+from slipenv.vehicles.kinematics import twist_to_commands
+from slipenv.vehicles.presets import farm_2wd
+from slipenv.vehicles.spec import VehicleSpec, WheelSpec
+
+
+def skid4() -> VehicleSpec:
+    """A symmetric four-wheel skid-steer vehicle (Husky-sized, centred mass) for the tests.
+
+    pybullet_data's Husky carries its mass ahead of its wheel centre, so in a turn its
+    reference point slides sideways (the instantaneous centre of rotation sits off the axle
+    midpoint): a real effect the vocabulary has no name for. This vehicle turns about its
+    reference point, so its clean logs are explained by the nominal model.
+    """
+    r, half_l, half_w = 0.165, 0.25, 0.28
+    wheels = tuple(
+        WheelSpec(name, (x, y, 0.0), r, 0.11, 2.5, side)
+        for name, x, y, side in (("front_left", half_l, half_w, "left"),
+                                 ("front_right", half_l, -half_w, "right"),
+                                 ("rear_left", -half_l, half_w, "left"),
+                                 ("rear_right", -half_l, -half_w, "right")))
+    return VehicleSpec(
+        name="skid4", kind="skid_steer", chassis_mass_kg=40.0, chassis_size_m=(0.8, 0.5, 0.25),
+        chassis_center_height_m=0.1, wheels=wheels, channels=("left", "right"),
+        track_width_m=2 * half_w, wheel_radius_nominal_m=r, max_wheel_speed_rad_s=6.0,
+        max_wheel_torque_nm=30.0, max_speed_mps=1.0, max_yaw_rate_rad_s=1.5,
+        counts_per_rad=285.0)
+
+
+GENERATED = ("none", "rolling_radius", "track_width", "torque_slip", "turning_slip",
+             "slope_side_slip", "soil_patch", "gyro_bias")
+VEHICLES = {"diff_drive": farm_2wd, "skid_steer": skid4}
+KINDS = {e: ("diff_drive", "skid_steer") for e in GENERATED}
+KINDS.update(torque_slip=("diff_drive",), soil_patch=("diff_drive",),
+             turning_slip=("skid_steer",), slope_side_slip=("skid_steer",))
+"""Vehicle kinds each effect is hidden on (see the module notes)."""
+ARENA_M = {"diff_drive": 5.0, "skid_steer": 3.5}  # half-size of the waypoint box [m]
+MAX_TURN_RATIO = {"diff_drive": 0.8, "skid_steer": 0.35}  # |v_r - v_l| / |v_r + v_l| limit
+CALIBRATION_S = 150.0  # [s] length of the noise-free calibration runs
+EXACT = {"diff_drive": ("gyro_bias",), "skid_steer": ("gyro_bias",)}
+"""Effects whose true parameters the physics takes one to one (a sensor offset). For all
+others the vehicle's own dynamics shift the effective value a little (the farm vehicle's
+castors let it oversteer, tread compliance adds slip), so their true values are those fitted
+on a long noise-free calibration run of the same world; the set values are in ``world``."""
+ACCEL_LIMIT = 0.4  # [1/s] speed command changes by at most this fraction of top speed per s
+
+
+@dataclass
+class SynthLog:
+    """A generated log and what is hidden in it.
+
+    Attributes
+    ----------
+    log : Log
+    effect : str
+        The hidden effect id (``none`` for a clean log).
+    truth : dict
+        True parameters in the contract's names (SI), where they are known.
+    world : dict
+        The simulated world's settings (for the record; also written to ``meta.json``).
+    """
+
+    log: Log
+    effect: str
+    truth: dict[str, float] = field(default_factory=dict)
+    world: dict = field(default_factory=dict)
+
+
+def _draw_size(rng: np.random.Generator, lo: float, hi: float) -> float:
+    return float(rng.uniform(lo, hi) * rng.choice([-1.0, 1.0]))
+
+
+def base_config(kind: str, slope_deg: float = 0.0, azimuth_deg: float = 0.0,
+                noise: SensorNoise | None = None) -> SlipEnvConfig:
+    """The clean world of ``kind``: the vehicle on rigid ground, optional planar slope.
+
+    Rigid ground (``simreplay.rigid_ground``): the concrete preset with its slip stiffnesses
+    scaled up, so that the slip a clean log holds uphill stays near 0.1 %.
+    """
+    terrain = (TerrainSpec(kind="slope", slope_deg=slope_deg, downhill_azimuth_deg=azimuth_deg,
+                           size_m=60.0) if slope_deg else TerrainSpec())
+    return SlipEnvConfig(vehicle=VEHICLES[kind](), terrain=terrain, soil="concrete",
+                         force_model=rigid_ground(kind), sensor_noise=noise or SensorNoise())
+
+
+def hidden_world(kind: str, effect: str, rng: np.random.Generator,
+                 focus: tuple[float, float]) -> tuple[SlipEnvConfig, dict, dict]:
+    """The world with ``effect`` hidden: (config, model applied, settings).
+
+    A skid-steer vehicle that turns on a side slope scrubs sideways and slides downhill, so
+    it stands on a slope only when slope side slip is the hidden effect; a differential-drive
+    vehicle stands on a 5-12° slope in 30 % of the logs whatever the effect.
+    """
+    slope = 0.0
+    if effect == "slope_side_slip":
+        slope = float(rng.uniform(8.0, 15.0))
+    elif kind == "diff_drive" and effect != "soil_patch" and rng.random() < 0.3:
+        slope = float(rng.uniform(5.0, 12.0))
+    azimuth = float(rng.uniform(-180.0, 180.0))
+    cfg = base_config(kind, slope, azimuth)
+    spec = make_vehicle(cfg.vehicle)
+    wheels = list(spec.channels)
+    world = {"slope_deg": slope, "azimuth_deg": azimuth}
+    model: dict = {}
+    if effect == "rolling_radius":
+        r = spec.wheel_radius_nominal_m
+        model = {effect: {f"radius_{w}_m": r * (1 + _draw_size(rng, 0.01, 0.04)) for w in wheels}}
+    elif effect == "track_width" and kind == "skid_steer":
+        # a skid-steer's effective width is its turning resistance, not its wheel spacing
+        scale = float(np.exp(_draw_size(rng, np.log(1.5), np.log(3.0))))
+        world["lat_scale"] = scale
+        return dataclasses.replace(cfg, force_model=_scaled(cfg, lat_scale=scale)), {}, world
+    elif effect == "track_width":
+        w0 = spec.track_width_m
+        model = {effect: {"track_width_m": w0 * (1 + _draw_size(rng, 0.05, 0.15))}}
+    elif effect in ("torque_slip", "soil_patch"):
+        slip = rng.uniform(0.02, 0.06) if effect == "torque_slip" else rng.uniform(0.02, 0.05)
+        k_s = typical_torque_nm(kind) / float(slip)
+        model = {effect: {f"k_s_{w}_nm": k_s for w in wheels}}
+        if effect == "soil_patch":
+            radius = float(rng.uniform(0.35, 0.5)) * ARENA_M[kind]
+            model[effect].update(patch_center_x_m=focus[0], patch_center_y_m=focus[1],
+                                 patch_radius_m=radius)
+    elif effect == "turning_slip":
+        scale = float(rng.uniform(0.03, 0.1))  # of the rigid ground: 0.15-0.5 of concrete
+        world["long_scale"] = scale
+        return dataclasses.replace(cfg, force_model=_scaled(cfg, long_scale=scale)), {}, world
+    elif effect == "slope_side_slip":
+        # soft ground that gives little side force: on the slope the vehicle slides downhill
+        scale = float(rng.uniform(0.15, 0.4))
+        world["lat_scale"] = scale
+        return dataclasses.replace(cfg, force_model=_scaled(cfg, lat_scale=scale)), {}, world
+    elif effect == "gyro_bias":
+        model = {effect: {"gyro_bias_rad_s": _draw_size(rng, 0.005, 0.03)}}
+    cfg = apply_model(cfg, model) if model else cfg
+    return cfg, model, world
+
+
+def _scaled(cfg: SlipEnvConfig, **options: float):
+    from slipenv.diagnose.extension import ScaledSlip
+
+    return ScaledSlip(cfg.force_model, tuple(sorted(options.items())))
+
+
+@functools.lru_cache(maxsize=4)
+def typical_torque_nm(kind: str) -> float:
+    """Median |channel torque| of the clean world while driving the generator's routes."""
+    rec = drive(base_config(kind), kind, np.random.default_rng(12345), 40.0, exact=True)
+    torque = np.abs(np.concatenate([rec.log.signals[f"torque_{w}"] for w in rec.log.wheels]))
+    return float(np.median(torque[torque > 0]))
+
+
+@dataclass
+class _Drive:
+    log: Log
+    spec: object
+
+
+def drive(cfg: SlipEnvConfig, kind: str, rng: np.random.Generator, duration_s: float,
+          focus: tuple[float, float] = (0.0, 0.0), columns=None, exact: bool = False,
+          meta_track_m: float | None = None) -> _Drive:
+    """Drive ``cfg``'s world between random waypoints; the run as a log (exact truth/sensors).
+
+    Every other waypoint lies near ``focus`` (so a soil patch there is crossed again and
+    again); speeds change every 3-8 s between 30 and 90 % of the vehicle's top speed.
+    """
+    spec = make_vehicle(cfg.vehicle)
+    noise = SensorNoise.perfect() if exact else cfg.sensor_noise
+    if exact:
+        noise = dataclasses.replace(noise, gyro_bias_rad_s=cfg.sensor_noise.gyro_bias_rad_s)
+    sim = Simulator(spec, cfg.terrain, make_force_model(cfg.force_model, spec),
+                    make_soil_map(cfg.soil, cfg.soil_map), control_hz=cfg.control_hz)
+    sensors = SensorSuite(spec.counts_per_rad, noise)
+    nominal = VEHICLES[kind]()
+    meta = meta_for(nominal, cfg.terrain, "rigid", notes="slipenv.diagnose.synth")
+    if meta_track_m is not None:
+        meta.data["vehicle"]["track_width_m"] = meta_track_m
+    rec = LogRecorder(meta, columns)
+    sloped = cfg.terrain.kind == "slope"
+    arena = ARENA_M[kind] * (2.0 if sloped else 1.0)  # slopes: long legs, gentle turns
+    turn_ratio = MAX_TURN_RATIO[kind] * (0.4 if sloped else 1.0)
+    try:
+        truth = sim.reset(0.0, 0.0, float(rng.uniform(-math.pi, math.pi)))
+        rec.record(sensors.measure(truth, rng), _pose(truth), [0.0] * len(spec.channels))
+        target, toward_focus = _waypoint(rng, arena, focus, True), True
+        v_ref, next_change, v_cmd, w_cmd = 0.0, 0.0, 0.0, 0.0
+        dv = ACCEL_LIMIT * nominal.max_speed_mps / cfg.control_hz
+        dw = ACCEL_LIMIT * nominal.max_yaw_rate_rad_s / cfg.control_hz
+        for _ in range(int(round(duration_s * cfg.control_hz))):
+            x, y, _ = truth.position_m
+            if truth.t_s >= next_change:
+                v_ref = float(rng.uniform(0.3, 0.9)) * nominal.max_speed_mps
+                next_change = truth.t_s + float(rng.uniform(3.0, 8.0))
+            if math.hypot(target[0] - x, target[1] - y) < 0.15 * arena:
+                toward_focus = not toward_focus
+                target = _waypoint(rng, arena, focus, toward_focus)
+            err = math.atan2(target[1] - y, target[0] - x) - truth.yaw_rad
+            err = (err + math.pi) % (2 * math.pi) - math.pi
+            limit = 2.0 * turn_ratio * v_ref / nominal.track_width_m
+            omega = float(np.clip(1.5 * err, -limit, limit))
+            v_cmd += float(np.clip(v_ref - v_cmd, -dv, dv))  # smooth commands, as a real
+            w_cmd += float(np.clip(omega - w_cmd, -dw, dw))  # drive's ramps would give
+            speeds, steer = twist_to_commands(nominal, v_cmd, w_cmd)
+            truth = sim.step(speeds, steer)
+            rec.record(sensors.measure(truth, rng), _pose(truth), speeds)
+    finally:
+        sim.close()
+    return _Drive(rec.to_log(), spec)
+
+
+def _pose(truth) -> tuple[float, float, float]:
+    return truth.position_m[0], truth.position_m[1], truth.yaw_rad
+
+
+def _waypoint(rng: np.random.Generator, arena: float, focus, near_focus: bool):
+    if near_focus:
+        r, a = 0.1 * arena * math.sqrt(rng.random()), rng.uniform(0, 2 * math.pi)
+        return focus[0] + r * math.cos(a), focus[1] + r * math.sin(a)
+    return tuple(rng.uniform(-arena, arena, size=2))
+
+
+_CALIBRATIONS: dict[tuple, dict[str, list[float]]] = {}
+
+
+def calibrate(cfg: SlipEnvConfig, kind: str, effects: tuple[str, ...],
+              meta_track_m: float | None = None,
+              focus: tuple[float, float] = (0.0, 0.0)) -> dict[str, list[float]]:
+    """Parameters of ``effects`` fitted on a long noise-free run of ``cfg``'s world (cached)."""
+    from slipenv.diagnose.fit import Problem, fit
+    from slipenv.diagnose.replay import build_segments
+
+    key = (repr(cfg), kind, effects, meta_track_m, focus)
+    if key not in _CALIBRATIONS:
+        run = drive(cfg, kind, np.random.default_rng(2024), CALIBRATION_S, focus, exact=True,
+                    meta_track_m=meta_track_m)
+        seg = build_segments([run.log], 10.0)
+        _CALIBRATIONS[key] = fit(Problem.from_segments(seg), effects).report(seg)
+    return _CALIBRATIONS[key]
+
+
+@functools.lru_cache(maxsize=8)
+def effective_track_m(kind: str, slope_deg: float = 0.0, azimuth_deg: float = 0.0) -> float:
+    """Nominal track width of the log's meta: geometric (diff-drive) or calibrated (skid)."""
+    spec = VEHICLES[kind]()
+    if kind == "diff_drive":
+        return spec.track_width_m
+    return calibrate(base_config(kind), kind, ("track_width",))["track_width_m"][0]
+
+
+def generate(seed: int, effect: str | None = None, kind: str | None = None,
+             duration_s: float = 60.0, columns=None, gt_gaps: bool | None = None) -> SynthLog:
+    """One log with one hidden effect of random size (random kind of effect if None).
+
+    Parameters
+    ----------
+    seed : int
+        Everything random (effect, size, route, noise, columns, gaps) follows from it.
+    effect : str, optional
+        One of ``GENERATED``; random if None.
+    kind : str, optional
+        ``diff_drive`` or ``skid_steer``; random if None (turning slip forces skid-steer).
+    duration_s : float
+        Log length [s] at 20 Hz.
+    columns : iterable of str, optional
+        Optional column groups (``slipenv.logs.export.OPTIONAL_GROUPS``); random if None,
+        always including what the effect needs (torque, IMU).
+    gt_gaps : bool, optional
+        Cut 1-2 stretches of 3-6 s out of the ground truth; random if None.
+    """
+    rng = np.random.default_rng(seed)
+    effect = effect or str(rng.choice(GENERATED))
+    if effect not in GENERATED:
+        raise ValueError(f"cannot hide {effect!r}; the generator hides {GENERATED}")
+    kinds = KINDS[effect]
+    kind = kind or str(rng.choice(kinds))
+    if kind not in kinds:
+        raise ValueError(f"the generator hides {effect} on {' and '.join(kinds)} vehicles only")
+    focus = tuple(rng.uniform(-0.5, 0.5, size=2) * ARENA_M[kind])
+    cfg, model, world = hidden_world(kind, effect, rng, focus)
+    if columns is None:
+        columns = {g for g in ("cmd", "torque", "imu", "attitude", "heading") if rng.random() < 0.6}
+    columns = set(columns) | {"torque_slip": {"torque"}, "soil_patch": {"torque"},
+                              "gyro_bias": {"imu"}}.get(effect, set())
+    if effect == "turning_slip":
+        columns.discard("torque")
+    meta_w = effective_track_m(kind)
+    if effect == "slope_side_slip":  # the operator calibrated the width on level ground
+        level = dataclasses.replace(cfg, terrain=TerrainSpec())
+        meta_w = calibrate(level, kind, ("track_width",))["track_width_m"][0]
+    run = drive(cfg, kind, rng, duration_s, focus, columns, meta_track_m=meta_w)
+    log = _add_truth_noise(run.log, rng, gt_gaps)
+    world.update({k: v for values in model.values() for k, v in values.items()})
+    if effect in EXACT[kind]:
+        truth = dict(model[effect])
+    elif effect != "none":
+        truth = {k: v[0] for k, v in calibrate(cfg, kind, (effect,), meta_w, focus).items()}
+    else:
+        truth = {}
+    world.update(vehicle=VEHICLES[kind]().name, seed=seed)
+    log.meta.data["synth"] = {"effect": effect, "truth": truth, "world": world}
+    return SynthLog(log, effect, truth, world)
+
+
+def _add_truth_noise(log: Log, rng: np.random.Generator, gaps: bool | None) -> Log:
+    """OptiTrack-like ground truth: 0.5-3 mm and 0.5-3 mrad noise, optional gaps."""
+    sig = dict(log.signals)
+    n = len(log)
+    sigma = float(rng.uniform(0.5e-3, 3e-3))
+    for name, scale in (("gt_x", sigma), ("gt_y", sigma), ("gt_yaw", sigma)):
+        sig[name] = sig[name] + rng.normal(0.0, scale, n)
+    if gaps if gaps is not None else rng.random() < 0.5:
+        dt = float(np.median(np.diff(log.t)))
+        for _ in range(int(rng.integers(1, 3))):
+            length = int(rng.uniform(3.0, 6.0) / dt)
+            start = int(rng.integers(n // 10, max(n // 10 + 1, n - length - n // 10)))
+            for name in ("gt_x", "gt_y", "gt_yaw"):
+                sig[name][start:start + length] = np.nan
+    return Log(log.meta.copy(), sig)

@@ -1,0 +1,151 @@
+"""``slipenv diagnose``: the JSON report of log-format.md, the human report, and bad input."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from slipenv.cli import main
+from slipenv.logs import Log, LogMeta, read_log, write_log
+
+
+def run(*argv) -> int:
+    return main(["diagnose", *map(str, argv), "--quiet"])
+
+
+def test_writes_json_matching_the_schema_and_a_report(synth_log_dir, tmp_path, capsys):
+    out, folder = tmp_path / "d.json", tmp_path / "report"
+    assert run(synth_log_dir, "--json", out, "--report", folder) == 0
+    rep = json.loads(out.read_text())
+    assert rep["format"] == "slipenv-diagnosis/1"
+    assert rep["log"] == str(synth_log_dir)
+    assert rep["cause"] == "rolling_radius"
+    assert isinstance(rep["also"], list)
+    for name, pair in rep["parameters"].items():
+        assert name in ("radius_left_m", "radius_right_m")
+        assert len(pair) == 2 and all(isinstance(v, float) for v in pair) and pair[1] > 0
+    g = rep["gain"]
+    assert set(g) == {"metric", "before", "after", "relative", "evaluated_on"}
+    assert g["metric"] == "position_rmse_m" and g["evaluated_on"] == "held-out"
+    assert g["after"] < g["before"] and g["relative"] == pytest.approx(1 - g["after"] / g["before"])
+    assert rep["candidates"][0]["cause"] == "rolling_radius"
+    assert all({"cause", "score", "gain_relative"} <= set(c) for c in rep["candidates"])
+    for name in ("report.md", "overlay.png", "residuals_time.png", "regressors.png",
+                 "candidates.png", "pybullet.png"):
+        assert (folder / name).stat().st_size > 0, name
+    text = (folder / "report.md").read_text()
+    assert "Cause: rolling_radius" in text and "held-out" in text
+    assert "cause: rolling_radius" in capsys.readouterr().out
+
+
+def test_model_from_the_report_loads_into_the_simulation(synth_log_dir, tmp_path):
+    from slipenv.diagnose.extension import apply_model
+    from slipenv.envs.config import SlipEnvConfig
+
+    out = tmp_path / "d.json"
+    assert run(synth_log_dir, "--json", out) == 0
+    cfg = apply_model(SlipEnvConfig(vehicle="farm_2wd"), json.loads(out.read_text()))
+    radii = [w.rolling_radius_m for w in cfg.vehicle.wheels if w.role == "driven"]
+    assert all(r is not None and r != 0.275 for r in radii)
+
+
+def test_ground_truth_missing_in_stretches_still_diagnoses(synth_log_dir, tmp_path):
+    log = read_log(synth_log_dir)
+    sig = dict(log.signals)
+    n = len(log)
+    for name in ("gt_x", "gt_y", "gt_yaw"):
+        sig[name] = sig[name].copy()
+        sig[name][n // 5: n // 3] = np.nan
+        sig[name][n // 2: n // 2 + 40] = np.nan
+    folder = write_log(Log(log.meta, sig), tmp_path / "gappy")
+    out = tmp_path / "d.json"
+    assert run(folder, "--json", out) == 0
+    assert json.loads(out.read_text())["cause"] == "rolling_radius"
+
+
+def _small_log(kind="diff_drive", n=40, gt=True) -> Log:
+    t = np.arange(n) * 0.05
+    meta = LogMeta.new(kind, ["left", "right"], 0.3, 1.0, 100.0,
+                       wheelbase_m=1.0 if kind == "rover4ws" else None)
+    cols = dict(t=t, enc_left=np.round(t * 300), enc_right=np.round(t * 300))
+    if kind == "rover4ws":
+        cols.update(steer_left=np.zeros(n), steer_right=np.zeros(n))
+    if gt:
+        cols.update(gt_x=0.9 * t, gt_y=np.zeros(n), gt_yaw=np.zeros(n))
+    return Log.from_arrays(meta, require_ground_truth=gt, **cols)
+
+
+@pytest.mark.parametrize(("make", "message"), [
+    (lambda p: p / "missing", "no such log folder"),
+    (lambda p: p, "no log folders in it"),
+    (lambda p: _write(p, _small_log(n=100)), "at least 4"),
+    (lambda p: _write(p, _small_log("rover4ws", n=400)), "not supported"),
+    (lambda p: _corrupt_meta(_write(p, _small_log(n=400))), "meta.json"),
+    (lambda p: _corrupt_signals(_write(p, _small_log(n=400))), "non-numeric value"),
+])
+def test_malformed_input_is_a_clear_error(tmp_path, capsys, make, message):
+    target = make(tmp_path)
+    assert run(target) == 2
+    assert message in capsys.readouterr().err
+
+
+def _write(folder, log):
+    return write_log(log, folder / "log")
+
+
+def _corrupt_meta(folder):
+    (folder / "meta.json").write_text('{"format": "slipenv-log/1", "vehicle": ')
+    return folder
+
+
+def _corrupt_signals(folder):
+    lines = (folder / "signals.csv").read_text().splitlines()
+    cells = lines[5].split(",")
+    cells[1] = "ten"
+    lines[5] = ",".join(cells)
+    (folder / "signals.csv").write_text("\n".join(lines) + "\n")
+    return folder
+
+
+def test_log_without_ground_truth_gets_the_proprioceptive_analysis(tmp_path, capsys):
+    n = 2000
+    t = np.arange(n) * 0.05
+    rng = np.random.default_rng(0)
+    wl = 2.0 + np.repeat(rng.uniform(-1.5, 1.5, n // 100), 100)
+    wr = 2.0 - (wl - 2.0)
+    kin = 0.3 * (wr - wl) / 1.0
+    meta = LogMeta.new("skid_steer", ["left", "right"], 0.3, 1.0, 1000.0)
+    log = Log.from_arrays(meta, require_ground_truth=False, t=t,
+                          enc_left=np.round(np.cumsum(wl) * 0.05 * 1000),
+                          enc_right=np.round(np.cumsum(wr) * 0.05 * 1000),
+                          gyro_z=0.6 * kin + rng.normal(0, 0.01, n))
+    folder = write_log(log, tmp_path / "nogt", require_ground_truth=False)
+    out = tmp_path / "p.json"
+    assert run(folder, "--json", out, "--report", tmp_path / "r") == 0
+    rep = json.loads(out.read_text())
+    assert rep["ground_truth"] == "none" and rep["cause"] == "track_width"
+    assert rep["parameters"]["track_width_m"][0] == pytest.approx(1.0 / 0.6, rel=0.05)
+    assert rep["cannot_conclude"]
+    assert (tmp_path / "r" / "report.md").is_file()
+    shutil.rmtree(tmp_path / "r")
+
+
+def test_folder_of_logs_is_diagnosed_together(synth_log_dir, tmp_path):
+    log = read_log(synth_log_dir)
+    half = len(log) // 2
+    root = tmp_path / "runs"
+    for k, (a, b) in enumerate(((0, half), (half, len(log)))):
+        write_log(Log(log.meta, {c: v[a:b] for c, v in log.signals.items()}), root / f"run{k}")
+    out = tmp_path / "d.json"
+    assert run(root, "--json", out) == 0
+    rep = json.loads(out.read_text())
+    assert rep["segments"]["fold_by"] == "log" and len(rep["logs"]) == 2
+
+
+def test_log_without_ground_truth_or_gyro_is_a_clear_error(tmp_path, capsys):
+    folder = write_log(_small_log(n=400, gt=False), tmp_path / "bare", require_ground_truth=False)
+    assert run(folder) == 2
+    assert "nothing to compare" in capsys.readouterr().err

@@ -1,0 +1,105 @@
+"""``apply_model``: a fitted extension becomes the simulated world (gymnasium.make(model=...))."""
+
+from __future__ import annotations
+
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import slipenv  # noqa: F401  (registers the envs)
+from slipenv.diagnose.extension import ScaledSlip, apply_model, parse_model
+from slipenv.envs.config import SlipEnvConfig
+from slipenv.terramechanics.soil_map import PatchSoilMap
+
+FARM = dict(vehicle="farm_2wd", soil="concrete", force_model="linear", path="circle",
+            path_kwargs={"radius_m": 4.0, "speed_mps": 0.5})
+
+
+def make(**kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return gym.make("slipenv/Configurable-v0", **{**FARM, **kw})
+
+
+def travelled(env, steps=40) -> tuple[float, float]:
+    """(distance [m], mean wheel rotation [rad]) driving straight, after 20 steps to settle."""
+    env.reset(seed=0)
+    for _ in range(20):
+        _, _, _, _, info = env.step(np.array([0.4, 0.0], dtype=np.float32))
+    start, counts0 = info["true_pose"][:2], np.mean(info["sensors"].enc_counts)
+    for _ in range(steps):
+        _, _, _, _, info = env.step(np.array([0.4, 0.0], dtype=np.float32))
+    counts = np.mean(info["sensors"].enc_counts) - counts0
+    angle = counts / env.unwrapped.spec_vehicle.counts_per_rad
+    return float(np.hypot(*(info["true_pose"][:2] - start))), float(angle)
+
+
+def test_make_with_model_changes_the_world():
+    model = {"rolling_radius": {"radius_left_m": 0.30, "radius_right_m": 0.30},
+             "gyro_bias": {"gyro_bias_rad_s": 0.02}}
+    plain, extended = make(), make(model=model)
+    try:
+        u = extended.unwrapped
+        assert [w.rolling_radius_m for w in u.spec_vehicle.wheels][:2] == [0.30, 0.30]
+        assert u.config.sensor_noise.gyro_bias_rad_s == 0.02
+        assert u.config.model is None  # applied once
+        d0, a0 = travelled(plain)
+        d1, a1 = travelled(extended)
+        # metres per radian follow the rolling radius: 0.275 m nominal, 0.30 m extended
+        assert d0 / a0 == pytest.approx(0.275, rel=0.02)
+        assert d1 / a1 == pytest.approx(0.30, rel=0.02)
+    finally:
+        plain.close()
+        extended.close()
+
+
+def test_report_form_and_all_effects():
+    report = {"format": "slipenv-diagnosis/1", "cause": "torque_slip",
+              "also": ["soil_patch", "slope_side_slip", "track_width"],
+              "nominal": {"wheel_radius_m": 0.275, "track_width_m": 1.6},
+              "parameters": {"k_s_left_nm": [800.0, 10.0], "k_s_right_nm": [820.0, 10.0],
+                             "patch_center_x_m": [1.0, 0.1], "patch_center_y_m": [2.0, 0.1],
+                             "patch_radius_m": [1.5, 0.1], "patch_k_s_left_nm": [300.0, 5.0],
+                             "patch_k_s_right_nm": [300.0, 5.0], "beta_per_roll": [-0.3, 0.01],
+                             "beta_offset_rad": [0.0, 0.01], "track_width_m": [1.7, 0.01]}}
+    cfg = apply_model(SlipEnvConfig(**FARM), report)
+    assert isinstance(cfg.force_model, ScaledSlip)
+    options = dict(cfg.force_model.options)
+    assert options["long_scale"] > 0 and options["lat_scale"] > 0
+    assert isinstance(cfg.soil_map, PatchSoilMap)
+    assert cfg.vehicle.track_width_m == pytest.approx(1.6 * 1.7 / 1.6)
+    env = make(**{k: getattr(cfg, k) for k in ("vehicle", "soil_map", "force_model")})
+    try:
+        env.reset(seed=0)
+        for _ in range(5):
+            env.step(np.zeros(2, dtype=np.float32))
+    finally:
+        env.close()
+
+
+@pytest.mark.parametrize(("model", "message"), [
+    ({"wheel_wobble": {}}, "unknown effect 'wheel_wobble'"),
+    ({"gyro_bias": {"bias": 0.1}}, "unknown parameter"),
+    ({"track_width": {}}, "missing parameter"),
+    ({"rolling_radius": {}}, "missing parameter"),
+    ({"gyro_bias": {"gyro_bias_rad_s": "fast"}}, "finite number"),
+    ({"cause": "gyro_bias", "parameters": {"k_s_left_nm": [1.0, 0.1]}}, "belongs to none"),
+    ("gyro_bias", "must be a dict"),
+])
+def test_bad_models_are_clear_errors(model, message):
+    with pytest.raises(ValueError, match=message):
+        parse_model(model)
+
+
+def test_unknown_model_kwarg_in_make_is_an_error():
+    with pytest.raises(ValueError, match="unknown effect"):
+        make(model={"slope": {}})
+
+
+def test_none_model_changes_nothing():
+    cfg = SlipEnvConfig(**FARM)
+    assert apply_model(cfg, None) is cfg
+    assert apply_model(cfg, {"cause": "none", "also": [], "parameters": {}}).vehicle == \
+        cfg.vehicle
