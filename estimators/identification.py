@@ -72,6 +72,12 @@ class SlipAngleModel:
         Training samples k.
     train_runs : tuple[str, ...]
         Names of the runs fitted on (empty when fitted from bare arrays).
+    feature_range : tuple of three (min, max) pairs, or None
+        Range of each regressor in the training data [rad, rad, m]. :meth:`predict` clips the
+        regressors into it: a linear fit says nothing outside its data, and Eq. 9's angular
+        displacement in particular grows without bound on a circle (2π per lap) while the
+        paper's training rotations stop near π/2. None (models saved before this field): no
+        clipping.
     """
 
     coef: tuple[float, float, float, float]
@@ -79,17 +85,29 @@ class SlipAngleModel:
     residual_std: float
     n_samples: int = 0
     train_runs: tuple[str, ...] = ()
+    feature_range: tuple[tuple[float, float], ...] | None = None
 
     def __post_init__(self) -> None:
         if len(self.coef) != 4 or len(self.std_err) != 4:
             raise ValueError("SlipAngleModel.coef and std_err need 4 entries (Eq. 9: a1..a4)")
+        if self.feature_range is not None:
+            rng = tuple(tuple(float(v) for v in pair) for pair in self.feature_range)
+            if len(rng) != 3 or any(len(p) != 2 or not p[0] <= p[1] for p in rng):
+                raise ValueError("SlipAngleModel.feature_range needs 3 (min, max) pairs with "
+                                 f"min <= max (roll, angular displacement, radius), got {rng}")
+            object.__setattr__(self, "feature_range", rng)
 
     def predict(
         self, roll: ArrayLike, angular_displacement: ArrayLike, rotation_radius: ArrayLike
     ) -> np.ndarray:
-        """Slip angle β [rad] from roll [rad], angular displacement [rad], rotation radius [m]."""
-        terms = zip(self.coef[1:], (roll, angular_displacement, rotation_radius), strict=True)
-        return self.coef[0] + sum(a * np.asarray(x, dtype=float) for a, x in terms)
+        """Slip angle β [rad] from roll [rad], angular displacement [rad], rotation radius [m].
+
+        Each regressor is first clipped into ``feature_range`` (when set).
+        """
+        xs = [np.asarray(x, dtype=float) for x in (roll, angular_displacement, rotation_radius)]
+        if self.feature_range is not None:
+            xs = [np.clip(x, lo, hi) for x, (lo, hi) in zip(xs, self.feature_range, strict=True)]
+        return self.coef[0] + sum(a * x for a, x in zip(self.coef[1:], xs, strict=True))
 
     def to_dict(self) -> dict:
         """JSON-serialisable dict of the fields (tuples become lists)."""
@@ -271,6 +289,8 @@ def fit_slip_angle_regression(
         residual_std=math.sqrt(s2),
         n_samples=k,
         train_runs=tuple(train_runs),
+        feature_range=tuple((float(lo), float(hi)) for lo, hi in zip(x.min(0), x.max(0),
+                                                                        strict=True)),
     )
 
 

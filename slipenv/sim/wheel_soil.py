@@ -81,10 +81,20 @@ class WheelSoilInjector:
         Below this speed the motion resistance ramps linearly to zero [m/s] (resistance opposes
         motion and vanishes at standstill: it is not static friction).
     low_speed_mps : float
-        Below this speed a critically damped soil term fades in [m/s] (Pacejka §7.2: the
+        Below this speed the longitudinal soil damper fades in [m/s] (Pacejka §7.2: the
         relaxation model alone is an undamped spring at standstill, and its speed-dependent
         leak ratchets an oscillating parked vehicle downhill). Zero at and above this speed,
         so it never alters driving forces.
+    damping_ratio : float
+        Damping ratio of the soil "spring" (LuGre's σ1 term, Canudas de Wit et al. 1995).
+        Sideways it acts at every speed, on the rate of the lateral shear deformation, so steady
+        side slip and the force law are unchanged: undamped, a tracked vehicle turning at
+        crawling speed rocks and slides at several Hz. Lengthwise it acts only below
+        ``low_speed_mps``, on rω - v.
+    damping_speed_mps : float
+        Speed scale of the sideways damper [m/s]: weighted 1 / (1 + (V / this)⁴), about 1 at
+        the tracked vehicle's 5 cm/s and about 0.01 at 0.6 m/s, where the relaxation leak
+        V/σ already damps the spring.
     """
 
     def __init__(
@@ -99,6 +109,8 @@ class WheelSoilInjector:
         min_relaxation_m: float = 0.01,
         resistance_speed_mps: float = 0.02,
         low_speed_mps: float = 0.02,
+        damping_ratio: float = 0.5,
+        damping_speed_mps: float = 0.2,
     ) -> None:
         self.client = client
         self.body_id = body.body_id
@@ -108,7 +120,11 @@ class WheelSoilInjector:
         self.dt_s = dt_s
         self.min_relaxation_m = min_relaxation_m
         self.inv_resistance_speed = 1.0 / resistance_speed_mps
+        if not (math.isfinite(damping_ratio) and damping_ratio >= 0.0):
+            raise ValueError(f"damping_ratio must be finite and >= 0, got {damping_ratio!r}")
+        self.damping_ratio = float(damping_ratio)
         self.inv_low_speed = 1.0 / low_speed_mps
+        self.inv_damping_speed = 1.0 / damping_speed_mps
         wheels_on_ground = len(spec.wheels)
         self.mass_share_kg = spec.mass_kg / wheels_on_ground
         self.n = len(spec.wheels)
@@ -162,11 +178,15 @@ class WheelSoilInjector:
         self._damping = [self._critical_damping(k) for k in range(self.n)]
 
     def _critical_damping(self, k: int) -> tuple[float, float]:
-        """Low-speed damping (c_long, c_lat) [N s/m] of wheel ``k``: critical for the soil spring.
+        """Soil dampers of wheel ``k``: c_long [N s/m] on rω - v and d_lat [N per unit tan β].
 
-        The spring is the slip state at standstill: stiffness C/σ with C = dF/ds at s = 0 of the
-        force law at the wheel's static load share (finite difference). Capped at the explicit
-        stability limit m/dt.
+        The spring is the slip state held still: stiffness C/σ [N/m] with C = dF/ds at s = 0 of
+        the force law at the wheel's static load share (finite difference). Its damper c [N s/m]
+        is ``damping_ratio`` times critical for the wheel's mass share, capped at half the
+        explicit stability limit m/dt (a side force at the contact patch also rolls the body, so
+        the mass it moves is less than the share: at the full limit a tracked vehicle shakes
+        itself sideways at rest). Sideways it acts on the deformation rate σ dtanβ/dt, i.e.
+        d_lat = c σ / dt per unit change of the state in one substep.
         """
         if not self.driven[k]:
             return 0.0, 0.0
@@ -174,11 +194,12 @@ class WheelSoilInjector:
         fx, _, _ = self._kernels[k](1e-3, 0.0, load)
         _, fy, _ = self._kernels[k](0.0, 1e-3, load)
         sigma = self.dt_s / self._h[k]
-        out = []
-        for stiffness in (abs(fx) / 1e-3, abs(fy) / 1e-3):
-            c = 2.0 * math.sqrt(stiffness / sigma * self.mass_share_kg)
-            out.append(min(c, self.mass_share_kg / self.dt_s))
-        return out[0], out[1]
+        cap = 0.5 * self.mass_share_kg / self.dt_s
+        c_long, c_lat = (
+            min(2.0 * self.damping_ratio * math.sqrt(stiffness / sigma * self.mass_share_kg), cap)
+            for stiffness in (abs(fx) / 1e-3, abs(fy) / 1e-3)
+        )
+        return c_long, c_lat * sigma / self.dt_s
 
     def _rolling_radius_m(self, soil_params, k: int) -> float:
         if self.fixed_radius[k] is not None:  # a fitted model extension (slipenv diagnose)
@@ -220,7 +241,8 @@ class WheelSoilInjector:
 
         slip, tanb, h, r_eff, kernels = self.s, self.b, self._h, self._r_eff, self._kernels
         fx_out, fy_out, res_out = [0.0] * n, [0.0] * n, [0.0] * n
-        inv_eps, inv_low = self.inv_resistance_speed, self.inv_low_speed
+        inv_eps, inv_low, damping = self.inv_resistance_speed, self.inv_low_speed, self._damping
+        inv_damp_speed = self.inv_damping_speed
         apply_force, world = p.applyExternalForce, p.WORLD_FRAME
         for k in range(n):
             w = load[k]
@@ -261,19 +283,30 @@ class WheelSoilInjector:
                 # the contact point's sliding velocity (rω - v, v_lat) even at large slip: the
                 # combined-slip laws split the resultant by this direction.
                 v_ref = max(abs(r_omega), abs(v_long), abs(v_lat))
-                s = (slip[k] + hk * (r_omega - v_long)) / (1.0 + hk * v_ref)
+                s_old, t_old = slip[k], tanb[k]
+                s = (s_old + hk * (r_omega - v_long)) / (1.0 + hk * v_ref)
                 s = 1.0 if s > 1.0 else (-1.0 if s < -1.0 else s)
-                t = (tanb[k] + hk * v_lat) / (1.0 + hk * v_ref)
+                t = (t_old + hk * v_lat) / (1.0 + hk * v_ref)
                 t = 1.0 if t > 1.0 else (-1.0 if t < -1.0 else t)
                 slip[k], tanb[k] = s, t
                 f_long, f_lat, res = kernels[k](s, t, w)
                 fx_out[k], fy_out[k] = f_long, f_lat
+                # Side: shear-rate damping (LuGre's σ1 term), on the rate of the lateral shear
+                # deformation σ dtanβ/dt. It vanishes in steady side slip, so the force law
+                # stays exact, but damps the soil "spring" that the relaxation state is at
+                # crawling speed (a turning tracked vehicle otherwise rocks at several Hz).
+                c_long, d_lat = damping[k]
+                # Faded out with speed, as LuGre's σ1 is (Canudas de Wit et al. 2003): the
+                # relaxation leak V/σ damps the spring by itself once the wheel moves fast.
+                fade = v_ref * inv_damp_speed
+                fade *= fade
+                f_lat -= d_lat * (t - t_old) / (1.0 + fade * fade)
+                # Longitudinal: the same damper, on rω - v, but only near standstill (a braked
+                # wheel); when rolling, a damper at the patch would act on the wheel's small
+                # spin inertia and an explicit one would destabilise it.
                 speed = max(abs(v_long), abs(r_omega), abs(v_lat)) * inv_low
                 if speed < 1.0:
-                    c_long, c_lat = self._damping[k]
-                    fade = 1.0 - speed
-                    f_long += fade * c_long * (r_omega - v_long)
-                    f_lat -= fade * c_lat * v_lat
+                    f_long += (1.0 - speed) * c_long * (r_omega - v_long)
                 # Shear (traction, side force) acts at the contact patch: the motor feels r F.
                 apply_force(bid, self.links[k],
                             (f_long * fx_ + f_lat * lx, f_long * fy_ + f_lat * ly,

@@ -103,3 +103,22 @@ def test_split_is_by_run_and_validated():
         train_test_split_runs(items, 1.0, np.random.default_rng(0))
     with pytest.raises(ValueError, match="runs"):
         train_test_split_runs(items[:1], 0.5, np.random.default_rng(0))
+
+
+def test_regression_does_not_extrapolate_beyond_its_training_range(runs):
+    """A circle's angular displacement reaches 2π; the paper's runs stop near π/2."""
+    features = np.vstack([r.features for r in runs])
+    model = fit_slip_angle_regression(features, synth.beta_law(*features.T))
+    lo, hi = features.min(axis=0), features.max(axis=0)
+    np.testing.assert_allclose(model.feature_range, np.c_[lo, hi])
+    inside = (lo + hi) / 2
+    assert model.predict(*inside) == pytest.approx(synth.beta_law(*inside))
+    far = inside.copy()
+    far[1] = hi[1] + 2.0 * np.pi  # one more lap
+    at_edge = inside.copy()
+    at_edge[1] = hi[1]
+    assert model.predict(*far) == pytest.approx(synth.beta_law(*at_edge))
+    unclipped = SlipAngleModel(model.coef, model.std_err, model.residual_std)  # older files
+    assert unclipped.predict(*far) == pytest.approx(synth.beta_law(*far))
+    with pytest.raises(ValueError, match="feature_range"):
+        SlipAngleModel(model.coef, model.std_err, 0.0, feature_range=((0, 1), (1, 0), (0, 1)))

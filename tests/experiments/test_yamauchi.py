@@ -59,16 +59,18 @@ def test_slip_compensation_improves_on_gyrodometry_on_held_out_runs(quick):
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "paper: 82 % better; simulation about 40-55 %: on the slope Endo's n depends on the "
-    "turning direction (uphill or downhill) and Eq. 9 cannot carry the load-transfer part "
-    "of β (slipenv reproduce yamauchi; issue 4 closing note)"))
+    "paper: 82 % better; simulation 40 % (full) and 52 % (quick): on the slope Endo's n "
+    "depends on the turning direction (uphill or downhill), Endo cannot express the "
+    "common-mode slip of a vehicle running ahead of its tracks downhill, and Eq. 9 cannot "
+    "carry the load-transfer part of β (slipenv reproduce yamauchi; issue 4)"))
 def test_target_slip_compensated_rmse_is_at_most_0_4_of_gyrodometry(quick):
     assert quick[0]["metrics"]["targets_met"]["slip_compensated_rmse_le_0.4_gyrodometry"]
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "paper: 9.1 -> 1.3 cm; simulation: feed-forward of the predicted β lowers the mean circle "
-    "error by about 20 %, not by half (tests/envs/test_tracked_env.py; issue 4 closing note)"))
+    "paper: 9.1 -> 1.3 cm; simulation: on slip-compensated odometry the feed-forward is "
+    "slightly worse than feedback (17 against 15 cm); with the true pose and β it halves "
+    "the error, so the odometry limits the lap (tests/envs/test_tracked_env.py; issue 4)"))
 def test_target_feedforward_halves_the_feedback_error(quick):
     assert quick[0]["metrics"]["targets_met"]["feedforward_mean_le_0.5_feedback"]
 
