@@ -25,13 +25,17 @@ counter-clockwise model is the one the (counter-clockwise) circle uses and the o
 Endo's n is fitted on both directions, as Endo's relation is symmetric in them.
 
 What the simulation does not reproduce (numbers in the printed table): n comes out lower than
-the paper's 0.82 and falls with the tilt, because on a slope the uphill and the downhill turn
-have very different n (``endo_n_by_direction``); the slip-compensated odometry beats
-gyrodometry by about half, not 82 %; and the β feed-forward does not lower the circle error.
-In the simulation the slip angle of the turning vehicle on 15° is large (20-35°) and driven by
-the shift of the turning centre with the load transfer and by the vehicle running away
-downhill, neither of which Eq. 9's regressors carry; even a feed-forward of the *true* β with
-the true pose does not help there.
+the paper's 0.82 on the slopes, because there the uphill and the downhill turn have very
+different n (``endo_n_by_direction``); the slip-compensated odometry beats gyrodometry by about
+half, not 82 %; and the β feed-forward does not lower the circle error on the odometry. The law
+is not the limit: steering on the true pose with the true β it halves the error
+(``tests/envs/test_tracked_env.py``). The odometry is: over one lap gyrodometry ends 0.6 m off,
+Endo with the true β 0.27 m, because heading downhill the turning vehicle runs ahead of its
+tracks, a slip common to both tracks that Endo's relation cannot express. The slip angle of the
+turning vehicle on 15° is large (20-40°), driven by the turning centre moving with the load
+transfer and by that run-away, neither of which Eq. 9's regressors carry. The fitted Eq. 9 is
+evaluated only inside its training range (``SlipAngleModel.feature_range``): on the circle the
+angular displacement reaches 2π, far beyond the training rotations' π/2.
 """
 
 from __future__ import annotations
