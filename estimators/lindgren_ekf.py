@@ -42,6 +42,7 @@ from slipenv.sensors.frame import SensorFrame
 __all__ = ["LindgrenEKF", "LindgrenNoise", "OracleSoil", "Scheme", "parse_scheme", "SENSORS"]
 
 logger = logging.getLogger(__name__)
+_ROUTINE_SKIPS = frozenset({"bearing_gated"})  # counted in extras['skipped'], not logged
 
 SENSORS = ("gyro", "acc", "tilt", "odo", "bearing")  # keys of LindgrenEKF.history
 
@@ -276,7 +277,9 @@ class LindgrenEKF:
     def _skip(self, reason: str, n: int = 1) -> None:
         if n <= 0:
             return
-        if reason not in self.skipped:
+        # A bearing outside the χ² gate is the gate doing its job (clutter, a wrong beacon),
+        # not a fault, so it is only counted; anything else is worth one warning.
+        if reason not in self.skipped and reason not in _ROUTINE_SKIPS:
             logger.warning("LindgrenEKF: skipping measurement (%s); further ones are counted "
                            "in PoseEstimate.extras['skipped']", reason)
         else:

@@ -145,6 +145,17 @@ def format_table(result: dict) -> str:
                  f"{100 * pf['rmse_improvement_vs_gyrodometry_feedback']:.0f} %"))
     rows.append(("circle RMSE improvement, Eq. 10 vs Eq. 9 (same odometry)", "-",
                  f"{100 * pf['rmse_improvement']:.0f} %"))
+    lim = m["limits"]
+    rows.append(("limit: slip-compensated with the true β, RMSE / gyrodometry", "-",
+                 f"{lim['odometry_ratio_to_gyrodometry']['slip_compensated_true_beta']:.2f}"
+                 f" (Eq. 9: {lim['odometry_ratio_to_gyrodometry']['slip_compensated']:.2f})"))
+    for mode, label in (("true_beta", "odometry with the true β"),
+                        ("truth", "steering on the true pose and β")):
+        pair = lim["path_following"][mode]
+        rows.append((f"limit: circle 15°, {label}: mean error Eq. 9 -> Eq. 10 [cm]", "-",
+                     f"{100 * pair['feedback']['mean_error_m']:.1f} -> "
+                     f"{100 * pair['feedforward']['mean_error_m']:.1f} "
+                     f"(ratio {pair['feedforward_to_feedback_mean']:.2f})"))
     rows += [(f"target: {k}", "", "met" if v else "NOT met") for k, v in m["targets_met"].items()]
     w0 = max(len(r[0]) for r in rows)
     w1 = max(len(r[1]) for r in rows + [("", "paper")])

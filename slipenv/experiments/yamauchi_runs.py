@@ -13,15 +13,18 @@ import gymnasium as gym
 import numpy as np
 
 import slipenv  # noqa: F401  (registers the envs)
+from controllers.observation import build_observation
 from controllers.yamauchi import YamauchiController
 from estimators.base import wrap_angle
 from estimators.endo import EndoOdometry
 from estimators.gyrodometry import Gyrodometry
 from estimators.identification import SlipRun, fit_endo_n, train_test_split_runs, true_slips
 from estimators.yamauchi import SlipCompensatedOdometry
+from slipenv.envs.estimation import odometry_geometry
 from slipenv.paths import circle, straight
 
 ENV_ID = "slipenv/TrackedSlopeCircle-v0"
+ORACLE_MAX_SLIP_ANGLE_RAD = 1.5  # [rad] the true β is not clipped like a regression's (1 rad)
 
 
 @dataclass(frozen=True)
@@ -68,6 +71,27 @@ class _NoSlipAngle:
 
     def predict(self, roll, angular_displacement, rotation_radius):
         return np.zeros(np.shape(roll))
+
+
+class TrueSlipAngle:
+    """An oracle in Eq. 9's slot: predicts whatever true slip angle the caller last set.
+
+    Only the experiment's *limit* measurements use it, to separate what the slip-angle
+    regression costs from what Endo's slip ratios cost; no estimator or env observation sees
+    ground truth.
+    """
+
+    def __init__(self) -> None:
+        self.beta_rad = 0.0
+
+    def predict(self, roll, angular_displacement, rotation_radius):
+        return np.full(np.shape(roll), self.beta_rad)
+
+
+STEER_ON = ("observation", "true_beta", "truth")
+"""What a circle episode steers on: the env's observation (what a user gets); slip-compensated
+odometry with the true β in place of Eq. 9 (a limit: perfect slip-angle regression, Endo's
+slip ratios); the true pose and β (a limit: perfect odometry)."""
 
 
 def make_world(tilt_deg: float, soil: str = "toyoura_sand", **kwargs) -> gym.Env:
@@ -139,12 +163,29 @@ def fit_n(runs: list[RotationRun], geom, w: int):
     return fit_endo_n(cat["v_l"], cat["v_r"], cat["alpha_l"], cat["alpha_r"]), cat
 
 
-def replay(estimator, run: RotationRun) -> tuple[np.ndarray, list[dict]]:
-    """Feed a run's sensor frames to ``estimator`` from the true start pose: (k, 2) xy, extras."""
+def true_slip_angle_rad(v_body: np.ndarray) -> np.ndarray:
+    """Body slip angle atan2(v_y, v_x) [rad] of (k, 2) body velocities, 0 below 1 mm/s.
+
+    The definition of the simulator's ``info["true_slip_angle_rad"]``.
+    """
+    vx, vy = v_body[:, 0], v_body[:, 1]
+    return np.where(np.hypot(vx, vy) > 1e-3, np.arctan2(vy, vx), 0.0)
+
+
+def replay(estimator, run: RotationRun,
+           oracle: TrueSlipAngle | None = None) -> tuple[np.ndarray, list[dict]]:
+    """Feed a run's sensor frames to ``estimator`` from the true start pose: (k, 2) xy, extras.
+
+    With ``oracle`` (the estimator's β model), it is set to each frame's true slip angle
+    before that frame is fed.
+    """
     x, y, yaw = run.pose[0]
     est = estimator.reset(x, y, yaw, run.frames[0])
     xy, extras = [(est.x_m, est.y_m)], [dict(est.extras)]
-    for frame in run.frames[1:]:
+    beta = true_slip_angle_rad(run.v_body)
+    for k, frame in enumerate(run.frames[1:], start=1):
+        if oracle is not None:
+            oracle.beta_rad = float(beta[k])
         est = estimator.update(frame)
         xy.append((est.x_m, est.y_m))
         extras.append(dict(est.extras))
@@ -162,21 +203,37 @@ def slip_run(run: RotationRun, geom, n: float, cfg: Settings) -> SlipRun:
 
 
 def odometry_errors(runs, geom, n_by_tilt, model) -> dict[str, np.ndarray]:
-    """Squared position errors [m²] of the three odometries, pooled over ``runs``."""
-    out: dict[str, list] = {"gyrodometry": [], "endo": [], "slip_compensated": []}
+    """Squared position errors [m²] pooled over ``runs``: the three odometries, and the limit.
+
+    ``slip_compensated_true_beta`` is the slip-compensated odometry with the true slip angle in
+    place of Eq. 9: what a perfect regression would leave, i.e. the cost of Endo's slip ratios.
+    """
+    out: dict[str, list] = {"gyrodometry": [], "endo": [], "slip_compensated": [],
+                            "slip_compensated_true_beta": []}
     for run in runs:
         n = n_by_tilt[run.tilt_deg]
+        oracle = TrueSlipAngle()
         for key, est in (("gyrodometry", Gyrodometry(geom)), ("endo", EndoOdometry(geom, n)),
-                         ("slip_compensated", SlipCompensatedOdometry(geom, n, model))):
-            xy, _ = replay(est, run)
+                         ("slip_compensated", SlipCompensatedOdometry(geom, n, model)),
+                         ("slip_compensated_true_beta", SlipCompensatedOdometry(
+                             geom, n, oracle, max_slip_angle_rad=ORACLE_MAX_SLIP_ANGLE_RAD))):
+            xy, _ = replay(est, run, oracle if key.endswith("true_beta") else None)
             out[key].append(np.sum((xy - run.pose[:, :2]) ** 2, axis=1))
     return {k: np.concatenate(v) for k, v in out.items()}
 
 
 def circle_episode(cfg: Settings, pole_rps: float, feedforward: bool, estimator: str,
                    estimator_kwargs: dict, seed: int, tilt_deg: float,
-                   soil: str = "toyoura_sand") -> dict:
-    """One circle (§3.1) driven by the Yamauchi law through ``predict``, as a user would."""
+                   soil: str = "toyoura_sand", steer_on: str = "observation") -> dict:
+    """One circle (§3.1) driven by the Yamauchi law through ``predict``, as a user would.
+
+    ``steer_on`` (:data:`STEER_ON`) selects what the law sees. ``"observation"`` is the env's
+    observation from ``estimator``. The two limits build it from the info the env reports:
+    ``"true_beta"`` from slip-compensated odometry on the sensor frames with the true β
+    (Endo's n from ``estimator_kwargs["n"]``), ``"truth"`` from the true pose, speed and β.
+    """
+    if steer_on not in STEER_ON:
+        raise ValueError(f"steer_on must be one of {STEER_ON}, got {steer_on!r}")
     env = make_world(tilt_deg, soil, path=circle(cfg.circle_radius_m, cfg.speed_mps),
                      estimator=estimator, estimator_kwargs=estimator_kwargs)
     base = env.unwrapped
@@ -186,13 +243,24 @@ def circle_episode(cfg: Settings, pole_rps: float, feedforward: bool, estimator:
         use_feedforward=feedforward)
     obs, info = env.reset(seed=seed)
     policy.reset()
+    oracle, odometry, est = TrueSlipAngle(), None, None
+    if steer_on == "true_beta":
+        odometry = SlipCompensatedOdometry(
+            odometry_geometry(base.spec_vehicle), estimator_kwargs["n"], oracle,
+            max_slip_angle_rad=ORACLE_MAX_SLIP_ANGLE_RAD)
+        est = odometry.reset(*info["true_pose"], info["sensors"])
     true_xy, est_xy, ct = [], [], []
     end = "time limit"
     while True:
+        if steer_on != "observation":
+            obs, xy = _limit_observation(base.path, info, est)
         action, _ = policy.predict(obs, deterministic=True)
         obs, _, terminated, truncated, info = env.step(action)
+        oracle.beta_rad = info["true_slip_angle_rad"]
+        if odometry is not None:
+            est = odometry.update(info["sensors"])
         true_xy.append(info["true_pose"][:2])
-        est_xy.append(info["estimated_pose"][:2])
+        est_xy.append(info["estimated_pose"][:2] if steer_on == "observation" else xy)
         ct.append(info["cross_track_true_m"])
         if terminated or truncated:
             end = info.get("termination_reason") or info.get("truncation_reason") or "done"
@@ -204,6 +272,20 @@ def circle_episode(cfg: Settings, pole_rps: float, feedforward: bool, estimator:
             "end": end, "true_xy": np.array(true_xy), "est_xy": np.array(est_xy)}
 
 
+def _limit_observation(path, info: dict, est):
+    """The observation of a limit episode and the position it steers on.
+
+    ``est`` is the true-β odometry's last estimate, or None to steer on the truth.
+    """
+    if est is None:
+        x, y, yaw = info["true_pose"]
+        speed, rate = info["true_velocity_body_mps"][0], info["true_yaw_rate_rps"]
+        beta = info["true_slip_angle_rad"]
+    else:
+        x, y, yaw, speed, rate = est.x_m, est.y_m, est.yaw_rad, est.speed_mps, est.yaw_rate_rps
+        beta = est.slip_angle_rad
+    return build_observation(x, y, yaw, speed, rate, path.project(x, y), beta), (x, y)
+
 
 def progress_bar(items, progress: bool, desc: str):
     if not progress:
@@ -211,6 +293,7 @@ def progress_bar(items, progress: bool, desc: str):
     from tqdm import tqdm
 
     return tqdm(items, desc=desc, leave=False)
+
 
 def collect_runs(cfg: Settings, rng: np.random.Generator, progress: bool) -> list[RotationRun]:
     """Every rotation run of the experiment (seeded start-heading jitter and sensor noise)."""

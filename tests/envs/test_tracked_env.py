@@ -14,8 +14,10 @@ import numpy as np
 import pytest
 
 import slipenv  # noqa: F401
-from controllers.observation import OBS_SLIP_ANGLE, build_observation
+from controllers.observation import OBS_SLIP_ANGLE
 from controllers.yamauchi import YamauchiController
+from slipenv.envs.registration import yamauchi_observation
+from slipenv.experiments.yamauchi_runs import Settings, circle_episode
 from slipenv.run import baseline_controller
 
 ENV_ID = "slipenv/TrackedSlopeCircle-v0"
@@ -85,36 +87,21 @@ def test_on_the_15_degree_slope_feedforward_beats_feedback_on_every_seed():
         assert lap(True, seed)["mean"] < lap(False, seed)["mean"]
 
 
-def oracle_lap(feedforward: bool, seed: int, pole_rps: float) -> float:
-    """Mean |cross-track| [m] of a lap steered on the *true* pose, speed and slip angle."""
-    env = gym.make(ENV_ID)
-    base = env.unwrapped
-    policy = YamauchiController.from_poles(
-        pole_rps, 0.05, v_max_mps=base.spec_vehicle.max_speed_mps,
-        omega_max_rps=base.spec_vehicle.max_yaw_rate_rad_s, dt_s=base.dt_s,
-        use_feedforward=feedforward)
-    _, info = env.reset(seed=seed)
-    policy.reset()
-    errors = []
-    while True:
-        x, y, yaw = info["true_pose"]
-        obs = build_observation(x, y, yaw, info["true_velocity_body_mps"][0],
-                                info["true_yaw_rate_rps"], base.path.project(x, y),
-                                info["true_slip_angle_rad"])
-        action, _ = policy.predict(obs, deterministic=True)
-        _, _, terminated, truncated, info = env.step(action)
-        errors.append(abs(info["cross_track_true_m"]))
-        if terminated or truncated:
-            break
-    env.close()
-    return float(np.mean(errors))
+def truth_lap(feedforward: bool, pole_rps: float) -> float:
+    """Mean |cross-track| [m] of a lap steered on the *true* pose, speed and slip angle.
+
+    One seed: steering on the truth, the sensor noise that seeds draw plays no part.
+    """
+    kwargs = yamauchi_observation()["estimator_kwargs"]
+    lap = circle_episode(Settings(), pole_rps, feedforward, "slip_compensated", kwargs, 0,
+                         15.0, steer_on="truth")
+    return lap["mean_error_m"]
 
 
 def test_with_the_true_pose_and_slip_angle_the_feedforward_about_halves_the_circle_error():
     """The law itself works on the slope: Eq. 10 fed the true β (and steering on the true
-    pose) against Eq. 9 with the same gains (measured 2.5 against 5.2 cm). One seed: steering
-    on the truth, the sensor noise that seeds draw plays no part."""
-    feedback, feedforward = oracle_lap(False, 0, 0.6), oracle_lap(True, 0, 0.6)
+    pose) against Eq. 9 with the same gains (measured 2.5 against 5.2 cm)."""
+    feedback, feedforward = truth_lap(False, 0.6), truth_lap(True, 0.6)
     assert feedforward < 0.55 * feedback
     assert feedforward < 0.035
 
