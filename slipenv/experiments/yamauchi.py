@@ -28,13 +28,14 @@ What limits the result is measured, not argued (``metrics["limits"]``, the table
 rows): the odometry replayed with the *true* slip angle in place of Eq. 9, which leaves only
 Endo's slip ratios as error, and the circle steered on that odometry and on the true pose and β.
 On this simulation even the true β leaves the slip-compensated odometry at 0.38-0.43 of
-gyrodometry, not the paper's 0.18 (the fitted Eq. 9 reaches 0.5-0.6): heading downhill the turning vehicle runs ahead of both tracks (the turn
-uses up the soil's shear, so little is left to hold the vehicle back), a slip common to both
-tracks that Endo's relation, a ratio of the two tracks' slips, cannot express; Endo's n also
-depends on whether the vehicle turns uphill or downhill (``endo_n_by_direction``). On that
-odometry the feed-forward lowers the circle error by 10-15 %, and steered on the truth with
-the gains tuned on rigid ground by 30-40 % (halving it needs stiffer gains): the
-slip angle of the turning vehicle swings by 20-40° around a lap, faster than the law follows.
+gyrodometry, not the paper's 0.18 (the fitted Eq. 9 reaches 0.5-0.6): heading downhill the
+turning vehicle runs ahead of both tracks (the turn uses up the soil's shear, so little is
+left to hold the vehicle back), a slip common to both tracks that Endo's relation, a ratio of
+the two tracks' slips, cannot express; Endo's n also depends on whether the vehicle turns
+uphill or downhill (``endo_n_by_direction``). On that odometry the feed-forward lowers the
+circle error by 10-15 %, and steered on the truth with the gains tuned on rigid ground by
+30-40 % (halving it needs stiffer gains): the slip angle of the turning vehicle swings by
+20-40° around a lap, faster than the law follows.
 The fitted Eq. 9 is evaluated only inside its training range
 (``SlipAngleModel.feature_range``): on the circle the angular displacement reaches 2π, far
 beyond the training rotations' π/2.
