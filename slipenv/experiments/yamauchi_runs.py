@@ -253,14 +253,15 @@ def circle_episode(cfg: Settings, pole_rps: float, feedforward: bool, estimator:
     end = "time limit"
     while True:
         if steer_on != "observation":
-            obs, xy = _limit_observation(base.path, info, est)
+            obs = _limit_observation(base.path, info, est)
         action, _ = policy.predict(obs, deterministic=True)
         obs, _, terminated, truncated, info = env.step(action)
         oracle.beta_rad = info["true_slip_angle_rad"]
         if odometry is not None:
             est = odometry.update(info["sensors"])
         true_xy.append(info["true_pose"][:2])
-        est_xy.append(info["estimated_pose"][:2] if steer_on == "observation" else xy)
+        est_xy.append(info["estimated_pose"][:2] if steer_on == "observation"
+                      else info["true_pose"][:2] if est is None else (est.x_m, est.y_m))
         ct.append(info["cross_track_true_m"])
         if terminated or truncated:
             end = info.get("termination_reason") or info.get("truncation_reason") or "done"
@@ -273,7 +274,7 @@ def circle_episode(cfg: Settings, pole_rps: float, feedforward: bool, estimator:
 
 
 def _limit_observation(path, info: dict, est):
-    """The observation of a limit episode and the position it steers on.
+    """The observation of a limit episode.
 
     ``est`` is the true-β odometry's last estimate, or None to steer on the truth.
     """
@@ -284,7 +285,7 @@ def _limit_observation(path, info: dict, est):
     else:
         x, y, yaw, speed, rate = est.x_m, est.y_m, est.yaw_rad, est.speed_mps, est.yaw_rate_rps
         beta = est.slip_angle_rad
-    return build_observation(x, y, yaw, speed, rate, path.project(x, y), beta), (x, y)
+    return build_observation(x, y, yaw, speed, rate, path.project(x, y), beta)
 
 
 def progress_bar(items, progress: bool, desc: str):
