@@ -128,3 +128,8 @@ def test_gains_that_make_no_sense_are_a_clear_error(gains):
 def test_pole_placement_rejects_a_non_positive_pole_or_speed(args):
     with pytest.raises(ValueError, match="pole_rps|speed_mps"):
         YamauchiController.from_poles(*args, v_max_mps=0.3, omega_max_rps=0.8, dt_s=0.05)
+
+
+def test_a_circle_episode_steering_on_an_unknown_source_is_a_clear_error():
+    with pytest.raises(ValueError, match="steer_on must be one of"):
+        circle_episode(Settings(), 0.6, True, "slip_compensated", {}, 0, 15.0, steer_on="gps")
