@@ -33,8 +33,8 @@ turning vehicle runs ahead of both tracks (the turn uses up the soil's shear, so
 left to hold the vehicle back), a slip common to both tracks that Endo's relation, a ratio of
 the two tracks' slips, cannot express; Endo's n also depends on whether the vehicle turns
 uphill or downhill (``endo_n_by_direction``). On that odometry the feed-forward lowers the
-circle error by 10-15 %, and steered on the truth with the gains tuned on rigid ground by
-30-40 % (halving it needs stiffer gains): the slip angle of the turning vehicle swings by
+circle error by 8-15 %, and steered on the truth with the gains tuned on rigid ground by
+31-42 % (halving it needs stiffer gains): the slip angle of the turning vehicle swings by
 20-40° around a lap, faster than the law follows.
 The fitted Eq. 9 is evaluated only inside its training range
 (``SlipAngleModel.feature_range``): on the circle the angular displacement reaches 2π, far

@@ -64,6 +64,7 @@ class RotationRun:
     pose: np.ndarray  # (k, 3) x, y, yaw [m, m, rad]
     v_body: np.ndarray  # (k, 2) body-frame velocity of the reference point [m/s]
     yaw_rate: np.ndarray  # (k,) [rad/s]
+    slip_angle: np.ndarray  # (k,) true body slip angle [rad] (the simulator's definition)
 
 
 class _NoSlipAngle:
@@ -125,6 +126,7 @@ def rotation_run(cfg: Settings, tilt_deg: float, rate_dps: float, direction: int
         pose=np.array([r["true_pose"] for r in rows]),
         v_body=np.array([r["true_velocity_body_mps"] for r in rows]),
         yaw_rate=np.array([r["true_yaw_rate_rps"] for r in rows]),
+        slip_angle=np.array([r["true_slip_angle_rad"] for r in rows]),
     )
 
 
@@ -163,15 +165,6 @@ def fit_n(runs: list[RotationRun], geom, w: int):
     return fit_endo_n(cat["v_l"], cat["v_r"], cat["alpha_l"], cat["alpha_r"]), cat
 
 
-def true_slip_angle_rad(v_body: np.ndarray) -> np.ndarray:
-    """Body slip angle atan2(v_y, v_x) [rad] of (k, 2) body velocities, 0 below 1 mm/s.
-
-    The definition of the simulator's ``info["true_slip_angle_rad"]``.
-    """
-    vx, vy = v_body[:, 0], v_body[:, 1]
-    return np.where(np.hypot(vx, vy) > 1e-3, np.arctan2(vy, vx), 0.0)
-
-
 def replay(estimator, run: RotationRun,
            oracle: TrueSlipAngle | None = None) -> tuple[np.ndarray, list[dict]]:
     """Feed a run's sensor frames to ``estimator`` from the true start pose: (k, 2) xy, extras.
@@ -182,10 +175,9 @@ def replay(estimator, run: RotationRun,
     x, y, yaw = run.pose[0]
     est = estimator.reset(x, y, yaw, run.frames[0])
     xy, extras = [(est.x_m, est.y_m)], [dict(est.extras)]
-    beta = true_slip_angle_rad(run.v_body)
     for k, frame in enumerate(run.frames[1:], start=1):
         if oracle is not None:
-            oracle.beta_rad = float(beta[k])
+            oracle.beta_rad = float(run.slip_angle[k])
         est = estimator.update(frame)
         xy.append((est.x_m, est.y_m))
         extras.append(dict(est.extras))
