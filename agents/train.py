@@ -20,8 +20,9 @@ from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 
 import slipenv  # noqa: F401
-from agents.residual import ResidualActionWrapper
 from slipenv.run import baseline_controller
+
+from .residual import ResidualActionWrapper
 
 ALGORITHMS = {"ppo": PPO, "sac": SAC}
 

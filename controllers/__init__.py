@@ -1,16 +1,17 @@
 """Control laws as policies: ``act(obs) -> action`` and stable-baselines3's ``predict``.
 
-Controllers read the observation laid out in :mod:`controllers.observation` and return
+Controllers read the observation laid out in :mod:`slipenv.contracts.observation` and return
 ``[v / v_max, omega / omega_max]`` as float32 in [-1, 1]^2.
 """
 
 from __future__ import annotations
 
-from controllers.base import Controller, Policy
-from controllers.observation import OBS_DIM, OBS_NAMES, build_observation
-from controllers.pure_pursuit import PurePursuitController
-from controllers.stanley import StanleyController
-from controllers.yamauchi import YamauchiController, is_hurwitz
+from slipenv.contracts.observation import OBS_DIM, OBS_NAMES, build_observation
+
+from .base import Controller, Policy
+from .pure_pursuit import PurePursuitController
+from .stanley import StanleyController
+from .yamauchi import YamauchiController, is_hurwitz
 
 CONTROLLERS: dict[str, type[Controller]] = {
     "yamauchi": YamauchiController,

@@ -15,7 +15,7 @@ from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
-from controllers.observation import ACT_DIM, OBS_DIM
+from slipenv.contracts.observation import ACT_DIM, OBS_DIM
 
 
 @runtime_checkable
@@ -45,7 +45,7 @@ def _positive(name: str, value: float) -> float:
 
 
 class Controller(ABC):
-    """Base class for control laws acting on the observation of ``controllers.observation``.
+    """Base class for control laws acting on the observation of ``slipenv.contracts.observation``.
 
     Parameters
     ----------

@@ -19,14 +19,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from controllers.base import Controller
-from controllers.local_path import arc_point
-from controllers.observation import (
+from slipenv.contracts.observation import (
     OBS_CROSS_TRACK,
     OBS_CURVATURE,
     OBS_HEADING_ERROR,
     OBS_REF_SPEED,
 )
+
+from .base import Controller
+from .local_path import arc_point
 
 
 class PurePursuitController(Controller):

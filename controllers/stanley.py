@@ -19,15 +19,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from controllers.base import Controller
-from controllers.local_path import arc_heading, arc_offset
-from controllers.observation import (
+from slipenv.contracts import wrap_angle
+from slipenv.contracts.observation import (
     OBS_CROSS_TRACK,
     OBS_CURVATURE,
     OBS_HEADING_ERROR,
     OBS_REF_SPEED,
-    wrap_to_pi,
 )
+
+from .base import Controller
+from .local_path import arc_heading, arc_offset
 
 
 class StanleyController(Controller):
@@ -71,7 +72,7 @@ class StanleyController(Controller):
         px = L * np.cos(phi)  # virtual front axle, path frame [m]
         py = obs[:, OBS_CROSS_TRACK] + L * np.sin(phi)
         e_fa = arc_offset(kappa, px, py)  # front-axle cross-track, > 0 left [m]
-        theta_e = wrap_to_pi(arc_heading(kappa, px, py) - phi)  # heading error at the front
+        theta_e = wrap_angle(arc_heading(kappa, px, py) - phi)  # heading error at the front
         delta = theta_e + np.arctan2(-self.k_e * e_fa, self.k_soft_mps + v)  # steering [rad]
         delta = np.clip(delta, -self.max_steer_rad, self.max_steer_rad)
         return v, v * np.tan(delta) / L, state

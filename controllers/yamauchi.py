@@ -36,8 +36,7 @@ import warnings
 
 import numpy as np
 
-from controllers.base import Controller
-from controllers.observation import (
+from slipenv.contracts.observation import (
     OBS_CROSS_TRACK,
     OBS_CURVATURE,
     OBS_HEADING_ERROR,
@@ -46,6 +45,8 @@ from controllers.observation import (
     OBS_SPEED,
     OBS_YAW_RATE,
 )
+
+from .base import Controller
 
 POLE_DT_LIMIT = 0.5  # warn when the fastest continuous pole |λ| exceeds this / dt_s
 

@@ -1,20 +1,19 @@
 """The estimator contract: what every pose estimator in ``estimators/`` takes and returns.
 
-Estimators eat :class:`slipenv.sensors.frame.SensorFrame` readings and never see PyBullet or
+Estimators eat :class:`slipenv.contracts.SensorFrame` readings and never see PyBullet or
 ground truth. The environment calls ``reset`` once per episode with the known start pose and
-``update`` once per control step; the returned :class:`PoseEstimate` becomes the observation.
+``update`` once per control step; the returned :class:`slipenv.contracts.PoseEstimate` becomes the observation.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from slipenv.angles import wrap_angle  # noqa: F401  (re-exported for the estimators)
-from slipenv.sensors.frame import SensorFrame
+from slipenv.contracts import SensorFrame
 
 
 @dataclass(frozen=True)
@@ -51,39 +50,6 @@ class OdometryGeometry:
                 raise ValueError(f"OdometryGeometry.{name} must be finite and > 0, got {value!r}")
         if not self.left or not self.right:
             raise ValueError("OdometryGeometry needs at least one left and one right wheel index")
-
-
-@dataclass(frozen=True)
-class PoseEstimate:
-    """An estimator's output at one step.
-
-    Attributes
-    ----------
-    x_m, y_m : float
-        Estimated position of the reference point (midway between the contact lines) [m].
-    yaw_rad : float
-        Estimated heading, counter-clockwise from world x [rad].
-    speed_mps : float
-        Estimated forward speed [m/s].
-    yaw_rate_rps : float
-        Estimated yaw rate [rad/s].
-    slip_angle_rad : float
-        Estimated body slip angle β̂ [rad] (angle from body x to the velocity); 0 when the
-        estimator does not model it.
-    cov : np.ndarray, shape (3, 3) or None
-        Covariance of (x, y, yaw) if the estimator tracks one.
-    extras : dict
-        Estimator-specific values (e.g. estimated k_s, R_w) for ``info``.
-    """
-
-    x_m: float
-    y_m: float
-    yaw_rad: float
-    speed_mps: float = 0.0
-    yaw_rate_rps: float = 0.0
-    slip_angle_rad: float = 0.0
-    cov: np.ndarray | None = None
-    extras: dict = field(default_factory=dict)
 
 
 @runtime_checkable

@@ -12,8 +12,9 @@ import math
 
 import numpy as np
 
-from estimators.base import OdometryGeometry, PoseEstimate, check_frame_time, wrap_angle
-from slipenv.sensors.frame import SensorFrame
+from slipenv.contracts import PoseEstimate, SensorFrame, wrap_angle
+
+from .base import OdometryGeometry, check_frame_time
 
 
 def side_angles_rad(frame: SensorFrame, geometry: OdometryGeometry) -> tuple[float, float]:

@@ -24,7 +24,7 @@ Regimes and regularisation (``speed_eps_mps`` = ε):
 
 - Straight driving, v_l ≈ v_r: Eq. 8 gives α_l/α_r = -1, f = 1/2, so V_x is the mean track speed
   and gyro noise or bias only shows up as equal and opposite slip ratios (the ratio α_l/α_r is
-  0/0 in the data, which is why :func:`estimators.identification.fit_endo_n` drops such
+  0/0 in the data, which is why :func:`slipenv.estimators.identification.fit_endo_n` drops such
   samples). Nothing divides by v_l - v_r, so nothing blows up.
 - Pivot turn, v_l = -v_r: f = 1/2, V_x = 0 and α_l = α_r (Eq. 8 with sgn = -1): both tracks
   lose the same fraction of their speed and the vehicle turns on the spot.
@@ -44,10 +44,11 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from estimators.base import OdometryGeometry
-from estimators.gyrodometry import Gyrodometry
-from estimators.skid_steer import check_tread
-from slipenv.sensors.frame import SensorFrame
+from slipenv.contracts import SensorFrame
+
+from .base import OdometryGeometry
+from .gyrodometry import Gyrodometry
+from .skid_steer import check_tread
 
 DEFAULT_SPEED_EPS_MPS = 1e-3  # [m/s] regularising track speed in the Endo weights
 
@@ -173,7 +174,7 @@ class EndoOdometry(Gyrodometry):
     geometry : OdometryGeometry
         Sprocket radius, tread (``track_width_m`` = 2d) and encoder layout.
     n : float
-        Endo's exponent [-], > 0 (:func:`estimators.identification.fit_endo_n`).
+        Endo's exponent [-], > 0 (:func:`slipenv.estimators.identification.fit_endo_n`).
     speed_eps_mps : float
         Regularising track speed ε [m/s], >= 0 (module docstring).
 

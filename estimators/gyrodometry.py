@@ -5,7 +5,7 @@ of the two track displacements (no slip), the heading change is the integrated g
 position advances along the midpoint heading (the exact arc for a constant-curvature step).
 
 :class:`Gyrodometry` is also the template of the skid-steer slip odometries
-(:class:`estimators.endo.EndoOdometry`, :class:`estimators.yamauchi.SlipCompensatedOdometry`):
+(:class:`slipenv.estimators.endo.EndoOdometry`, :class:`slipenv.estimators.yamauchi.SlipCompensatedOdometry`):
 they override one hook, :meth:`Gyrodometry._translation`, that turns the step's track
 displacements and gyro heading change into a body-x displacement and a slip angle.
 """
@@ -16,9 +16,10 @@ import math
 
 import numpy as np
 
-from estimators.base import OdometryGeometry, PoseEstimate, check_frame_time, wrap_angle
-from estimators.dead_reckoning import integrate_arc, side_angles_rad
-from slipenv.sensors.frame import SensorFrame
+from slipenv.contracts import PoseEstimate, SensorFrame, wrap_angle
+
+from .base import OdometryGeometry, check_frame_time
+from .dead_reckoning import integrate_arc, side_angles_rad
 
 
 def finite_reading(value: float, name: str) -> float:

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import stats
 
-from estimators.skid_steer import check_tread, slips_from_body_velocity
+from .skid_steer import check_tread, slips_from_body_velocity
 
 T = TypeVar("T")
 FEATURE_NAMES = ("roll_rad", "angular_displacement_rad", "rotation_radius_m")

@@ -32,12 +32,13 @@ import math
 import numpy as np
 from scipy import stats
 
-from estimators import lindgren_models as lm
-from estimators import lindgren_observations as lo
-from estimators.base import OdometryGeometry, PoseEstimate, check_frame_time, wrap_angle
-from estimators.lindgren_models import OracleSoil
-from estimators.lindgren_params import LindgrenNoise, Scheme, parse_scheme
-from slipenv.sensors.frame import SensorFrame
+from slipenv.contracts import PoseEstimate, SensorFrame, wrap_angle
+
+from . import lindgren_models as lm
+from . import lindgren_observations as lo
+from .base import OdometryGeometry, check_frame_time
+from .lindgren_models import OracleSoil
+from .lindgren_params import LindgrenNoise, Scheme, parse_scheme
 
 __all__ = ["LindgrenEKF", "LindgrenNoise", "OracleSoil", "Scheme", "parse_scheme", "SENSORS"]
 

@@ -51,7 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from slipenv.angles import wrap_angles  # noqa: F401  (part of this module's API)
+from slipenv.contracts import wrap_angles  # noqa: F401  (part of this module's API)
 
 G_MPS2 = 9.80665  # standard gravity [m/s²]; Eq. 14 accelerations are in units of g
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from estimators.lindgren_models import (
+from .lindgren_models import (
     G_MPS2,
     IA1,
     IA2,

@@ -19,12 +19,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from estimators import lindgren_models as lm
-from estimators import lindgren_observations as lo
-from estimators.base import OdometryGeometry
-from estimators.lindgren_params import LindgrenNoise
+from slipenv.contracts import SensorFrame
 from slipenv.sensors.beacons import BeaconScanner
-from slipenv.sensors.frame import SensorFrame
+
+from . import lindgren_models as lm
+from . import lindgren_observations as lo
+from .base import OdometryGeometry
+from .lindgren_params import LindgrenNoise
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ The regressors, as the paper defines them (§2.2) and as computed here online:
 - angular displacement [rad]: "Note that the angular displacement is the angle from the starting
   orientation of the rotation movement." Here: the gyro heading change accumulated since the
   current rotation movement started, signed (counter-clockwise > 0). A rotation movement starts at
-  :meth:`~estimators.gyrodometry.Gyrodometry.reset`, and again whenever the vehicle drives
+  :meth:`~slipenv.estimators.gyrodometry.Gyrodometry.reset`, and again whenever the vehicle drives
   straight (|ω| < ``straight_yaw_rate_rps``, the displacement is then 0) or reverses its turning
   direction. In the paper's experiments every run is one rotation of about 90° from rest, which
   this reproduces; ``straight_yaw_rate_rps=None`` keeps the angle since reset.
@@ -26,7 +26,7 @@ The regressors, as the paper defines them (§2.2) and as computed here online:
   ``max_rotation_radius_m`` (straight driving gives the clip value, not ∞), and is 0 at rest.
 
 Units matter because the coefficients are fitted in them: rad, rad, m; β in rad. Train the model
-(:func:`estimators.identification.fit_slip_angle_regression`) on features computed with
+(:func:`slipenv.estimators.identification.fit_slip_angle_regression`) on features computed with
 :func:`rotation_radius_m` and the same clip as the odometry uses.
 """
 
@@ -38,14 +38,15 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
-from estimators.base import OdometryGeometry
-from estimators.endo import DEFAULT_SPEED_EPS_MPS, EndoOdometry
-from estimators.gyrodometry import finite_reading
-from slipenv.sensors.frame import SensorFrame
+from slipenv.contracts import SensorFrame
+
+from .base import OdometryGeometry
+from .endo import DEFAULT_SPEED_EPS_MPS, EndoOdometry
+from .gyrodometry import finite_reading
 
 
 class SlipAnglePredictor(Protocol):
-    """Anything with Eq. 9's ``predict``, e.g. :class:`estimators.identification.SlipAngleModel`."""
+    """Anything with Eq. 9's ``predict``, e.g. :class:`slipenv.estimators.identification.SlipAngleModel`."""
 
     def predict(
         self, roll: ArrayLike, angular_displacement: ArrayLike, rotation_radius: ArrayLike
@@ -96,7 +97,7 @@ class SlipCompensatedOdometry(EndoOdometry):
     """Yamauchi's slip-compensated odometry: Endo slip ratios plus regression slip angle.
 
     Per step: Endo's body-x displacement Δx and gyro heading change Δθ
-    (:class:`~estimators.endo.EndoOdometry`); the features (roll, angular displacement, rotation
+    (:class:`~slipenv.estimators.endo.EndoOdometry`); the features (roll, angular displacement, rotation
     radius) at the new frame; ``β̂ = beta_model.predict(...)`` clipped to ±``max_slip_angle_rad``;
     the position moves ``Δx / cos β̄`` along ``θ + Δθ/2 + β̄`` (β̄ = mean β̂ of the step's ends),
     i.e. Eq. 5-6 with ``V_y = V_x tan β`` (Eq. 2).
@@ -108,7 +109,7 @@ class SlipCompensatedOdometry(EndoOdometry):
     n : float
         Endo's exponent [-], > 0.
     beta_model : SlipAnglePredictor
-        Fitted Eq. 9 regression, e.g. :class:`estimators.identification.SlipAngleModel`.
+        Fitted Eq. 9 regression, e.g. :class:`slipenv.estimators.identification.SlipAngleModel`.
     speed_eps_mps : float
         Regularising track speed of the Endo solve [m/s].
     max_rotation_radius_m : float

@@ -76,7 +76,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from agents.train import evaluate, train
+    from slipenv.agents.train import evaluate, train
 
     model = train(args.env_id, algo=args.algo, total_timesteps=args.timesteps, seed=args.seed,
                   residual=not args.no_residual, out=args.out, progress=not args.quiet)

@@ -15,11 +15,11 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from controllers import controller_by_name
-from controllers.yamauchi import YamauchiController
-from estimators.dead_reckoning import DeadReckoning
-from slipenv.angles import wrap_angle
+from slipenv.contracts.angles import wrap_angle
+from slipenv.controllers import controller_by_name
+from slipenv.controllers.yamauchi import YamauchiController
 from slipenv.envs.estimation import odometry_geometry
+from slipenv.estimators.dead_reckoning import DeadReckoning
 
 
 @dataclass

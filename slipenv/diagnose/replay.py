@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from estimators.endo import endo_left_share
 from slipenv.diagnose import geometry
 from slipenv.diagnose.segments import (  # noqa: F401  (re-exported)
     SUPPORTED_KINDS,
@@ -39,9 +38,10 @@ from slipenv.diagnose.segments import (  # noqa: F401  (re-exported)
     check_logs,
     wheel_sides,
 )
+from slipenv.estimators.endo import endo_left_share
 
 _SOFTPLUS_RAD = 0.01  # [rad] corner width of the combined-slip hinge (Reina Eq. 12 smoothed)
-_ENDO_EPS_MPS = 1e-3  # [m/s] regularising speed in Endo's split (estimators.endo)
+_ENDO_EPS_MPS = 1e-3  # [m/s] regularising speed in Endo's split (slipenv.estimators.endo)
 
 
 def _side_param(p: dict, base: str, default: np.ndarray | float) -> np.ndarray:

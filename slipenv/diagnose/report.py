@@ -16,11 +16,11 @@ from typing import Any
 
 import numpy as np
 
-from estimators.consistency import consistency_report
 from slipenv.diagnose import geometry, replay
 from slipenv.diagnose.effects import EFFECTS, effect
 from slipenv.diagnose.fit import Problem
 from slipenv.diagnose.select import ALPHA, MIN_DRIFT, MIN_GAIN, N_FOLDS, Selection
+from slipenv.estimators.consistency import consistency_report
 from slipenv.logs.log import Log
 
 FORMAT = "slipenv-diagnosis/1"

@@ -24,13 +24,13 @@ from typing import Any
 
 import numpy as np
 
-from estimators.base import Estimator, OdometryGeometry
-from estimators.dead_reckoning import DeadReckoning
-from estimators.endo import EndoOdometry
-from estimators.gyrodometry import Gyrodometry
-from estimators.lindgren_ekf import LindgrenEKF
-from estimators.lindgren_models import OracleSoil
-from estimators.lindgren_params import LindgrenNoise
+from slipenv.estimators.base import Estimator, OdometryGeometry
+from slipenv.estimators.dead_reckoning import DeadReckoning
+from slipenv.estimators.endo import EndoOdometry
+from slipenv.estimators.gyrodometry import Gyrodometry
+from slipenv.estimators.lindgren_ekf import LindgrenEKF
+from slipenv.estimators.lindgren_models import OracleSoil
+from slipenv.estimators.lindgren_params import LindgrenNoise
 from slipenv.vehicles.spec import VehicleSpec
 
 ENDO_N_HARD_FLOOR = 0.824  # Yamauchi Table 1
@@ -62,8 +62,8 @@ def _endo(spec: VehicleSpec, context: dict, n: float = ENDO_N_HARD_FLOOR, **kw: 
 
 def _slip_compensated(spec: VehicleSpec, context: dict, beta_model: Any = None,
                       n: float = ENDO_N_HARD_FLOOR, **kw: Any) -> Estimator:
-    from estimators.identification import SlipAngleModel
-    from estimators.yamauchi import SlipCompensatedOdometry
+    from slipenv.estimators.identification import SlipAngleModel
+    from slipenv.estimators.yamauchi import SlipCompensatedOdometry
 
     if beta_model is None:
         raise ValueError(

@@ -15,7 +15,7 @@ import numpy as np
 import pybullet as p
 from gymnasium import spaces
 
-from estimators.base import PoseEstimate, wrap_angle
+from slipenv.contracts import OBS_HIGH, OBS_LOW, PoseEstimate, build_observation, wrap_angle
 from slipenv.envs.config import SlipEnvConfig
 from slipenv.envs.estimation import make_estimator
 from slipenv.envs.factory import make_force_model, make_soil_map, make_vehicle
@@ -23,12 +23,6 @@ from slipenv.paths import Path, path_by_name
 from slipenv.sensors.onboard import SensorSuite
 from slipenv.sim.simulator import PhysicsBlowUp, Simulator, VehicleTruth
 from slipenv.vehicles.kinematics import twist_to_commands
-
-# Physical bounds of each observation entry (see the table in SlipEnv's docstring).
-OBS_LOW = np.array([-1e4, -1e4, -1, -1, -50, -20, -math.pi, -1e4, -math.pi, -1e3, 0, 0],
-                   dtype=np.float32)
-OBS_HIGH = np.array([1e4, 1e4, 1, 1, 50, 20, math.pi, 1e4, math.pi, 1e3, 50, 1],
-                    dtype=np.float32)
 
 
 class SlipEnv(gym.Env):
@@ -250,19 +244,12 @@ class SlipEnv(gym.Env):
         self._last_estimate = estimate
         proj = self.path.project(estimate.x_m, estimate.y_m, s_hint=self._s_est)
         self._s_est = proj.s
-        heading_err = wrap_angle(estimate.yaw_rad - proj.heading_rad)
-        obs = np.array(
-            [
-                estimate.x_m, estimate.y_m, math.cos(estimate.yaw_rad),
-                math.sin(estimate.yaw_rad), estimate.speed_mps, estimate.yaw_rate_rps,
-                estimate.slip_angle_rad, proj.cross_track_m, heading_err,
-                proj.curvature_1pm, proj.speed_mps, proj.s / self.path.length_m,
-            ],
-            dtype=np.float32,
-        )
-        if not np.all(np.isfinite(obs)):
-            raise FloatingPointError(f"non-finite observation from the estimator: {obs}")
-        return np.clip(obs, OBS_LOW, OBS_HIGH)
+        try:
+            return build_observation(estimate.x_m, estimate.y_m, estimate.yaw_rad,
+                                     estimate.speed_mps, estimate.yaw_rate_rps, proj,
+                                     estimate.slip_angle_rad)
+        except FloatingPointError as exc:
+            raise FloatingPointError(f"the estimator diverged: {exc}") from None
 
     def _info(self, truth: VehicleTruth, estimate: PoseEstimate, frame, extra: dict) -> dict:
         contact = self.sim.injector.contact_state()

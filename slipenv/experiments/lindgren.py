@@ -2,7 +2,7 @@
 
 Like the paper, each drive of the vehicle records the raw sensor data, and the EKF schemes run
 OFFLINE over the same frames (Lindgren §5: "the raw sensor data ... run through
-four different EKF schemes"), exactly as :class:`estimators.lindgren_ekf.LindgrenEKF` exposes
+four different EKF schemes"), exactly as :class:`slipenv.estimators.lindgren_ekf.LindgrenEKF` exposes
 them. The vehicle is ``slipenv/FarmField-v0`` (farm_2wd on field_loam, linear torque/slip law,
 true rolling radius 0.283 / 0.287 m against the concrete-calibrated nominal 0.275 m, finite
 k_s), steered by the baseline path follower on the env's Lindgren EKF in **scheme 1** (laser +
@@ -86,13 +86,13 @@ from pathlib import Path as FsPath
 import gymnasium as gym
 import numpy as np
 
-from estimators.base import OdometryGeometry
-from estimators.consistency import chi2_mean_band, consistency_report, nees
-from estimators.lindgren_ekf import LindgrenEKF, LindgrenNoise, OracleSoil
+from slipenv.contracts.frame import SensorFrame
 from slipenv.envs.estimation import default_k_s_prior, odometry_geometry, true_soil_for_oracle
+from slipenv.estimators.base import OdometryGeometry
+from slipenv.estimators.consistency import chi2_mean_band, consistency_report, nees
+from slipenv.estimators.lindgren_ekf import LindgrenEKF, LindgrenNoise, OracleSoil
 from slipenv.paths import Path, path_by_name
 from slipenv.run import baseline_controller
-from slipenv.sensors.frame import SensorFrame
 
 ENV_ID = "slipenv/FarmField-v0"
 STEER_SCHEME = 1  # the env's EKF scheme the path follower steers by (laser + inertial)

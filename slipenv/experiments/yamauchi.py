@@ -6,7 +6,7 @@
 1. Rotation runs (§2.3): heading across the slope (downhill to the right), track speeds for
    5 cm/s and 10/20/30 °/s, until the vehicle has turned 90°, on slopes of 0, 8 and 15°, turning
    left and right. Ground-truth slips from the simulator's body velocity and the encoders
-   (:func:`estimators.identification.true_slips`, the paper's motion capture).
+   (:func:`slipenv.estimators.identification.true_slips`, the paper's motion capture).
 2. Endo's n per tilt by log-log least squares with a 95 % interval (Eq. 8, Fig. 4).
 3. The slip-angle regression of Eq. 9 fitted on training runs, scored on held-out runs (split
    by run, never by sample) against the true slip angle (Fig. 5).
@@ -50,8 +50,8 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
-from estimators.identification import evaluate_runs, fit_slip_angle_runs
 from slipenv.envs.estimation import odometry_geometry
+from slipenv.estimators.identification import evaluate_runs, fit_slip_angle_runs
 from slipenv.experiments.yamauchi_runs import (
     QUICK,
     Settings,

@@ -10,9 +10,9 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
-from estimators.endo import EndoOdometry
-from estimators.gyrodometry import Gyrodometry
-from estimators.yamauchi import SlipCompensatedOdometry
+from slipenv.estimators.endo import EndoOdometry
+from slipenv.estimators.gyrodometry import Gyrodometry
+from slipenv.estimators.yamauchi import SlipCompensatedOdometry
 from slipenv.paths import circle
 
 

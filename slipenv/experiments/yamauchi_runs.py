@@ -13,14 +13,14 @@ import gymnasium as gym
 import numpy as np
 
 import slipenv  # noqa: F401  (registers the envs)
-from controllers.observation import build_observation
-from controllers.yamauchi import YamauchiController
-from estimators.base import wrap_angle
-from estimators.endo import EndoOdometry
-from estimators.gyrodometry import Gyrodometry
-from estimators.identification import SlipRun, fit_endo_n, train_test_split_runs, true_slips
-from estimators.yamauchi import SlipCompensatedOdometry
+from slipenv.contracts import wrap_angle
+from slipenv.contracts.observation import build_observation
+from slipenv.controllers.yamauchi import YamauchiController
 from slipenv.envs.estimation import odometry_geometry
+from slipenv.estimators.endo import EndoOdometry
+from slipenv.estimators.gyrodometry import Gyrodometry
+from slipenv.estimators.identification import SlipRun, fit_endo_n, train_test_split_runs, true_slips
+from slipenv.estimators.yamauchi import SlipCompensatedOdometry
 from slipenv.paths import circle, straight
 
 ENV_ID = "slipenv/TrackedSlopeCircle-v0"

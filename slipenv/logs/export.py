@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
+from slipenv.contracts.frame import SensorFrame
 from slipenv.logs.log import Log
 from slipenv.logs.meta import LogMeta
-from slipenv.sensors.frame import SensorFrame
 from slipenv.terrain.terrain import TerrainSpec
 from slipenv.vehicles.spec import VehicleSpec
 

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from slipenv.angles import wrap_angle, wrap_angles
+from slipenv.contracts.angles import wrap_angle, wrap_angles
 
 FIELD_HALF_SIZE_M = 15.0  # half the side of the default square field [m] (assumed)
 

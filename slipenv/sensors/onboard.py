@@ -10,8 +10,8 @@ import math
 
 import numpy as np
 
-from slipenv.angles import wrap_angle
-from slipenv.sensors.frame import SensorFrame
+from slipenv.contracts.angles import wrap_angle
+from slipenv.contracts.frame import SensorFrame
 from slipenv.sensors.noise import G_MPS2, SensorNoise
 from slipenv.sim.simulator import VehicleTruth
 

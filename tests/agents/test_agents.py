@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from agents.residual import ResidualActionWrapper
-from agents.train import evaluate, make_env, train
+from slipenv.agents.residual import ResidualActionWrapper
+from slipenv.agents.train import evaluate, make_env, train
 
 ENV = "slipenv/HuskySand-v0"
 SHORT = {"max_episode_s": 6.0}

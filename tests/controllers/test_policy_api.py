@@ -7,8 +7,7 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
-
-from controllers import (
+from slipenv.controllers import (
     CONTROLLERS,
     OBS_NAMES,
     Policy,
@@ -16,7 +15,8 @@ from controllers import (
     build_observation,
     controller_by_name,
 )
-from controllers import observation as ob
+from slipenv.contracts import observation as ob
+
 from slipenv.paths import circle, straight
 
 
@@ -90,7 +90,7 @@ def test_malformed_observations_are_rejected(scaling):
 
 def test_observation_layout_is_the_documented_table():
     indices = [getattr(ob, n) for n in dir(ob) if n.startswith("OBS_") and n not in
-               ("OBS_DIM", "OBS_NAMES")]
+               ("OBS_DIM", "OBS_NAMES", "OBS_LOW", "OBS_HIGH")]
     assert sorted(indices) == list(range(ob.OBS_DIM)) == list(range(len(OBS_NAMES)))
     assert OBS_NAMES[ob.OBS_CROSS_TRACK] == "cross_track_m"
     assert OBS_NAMES[ob.OBS_SLIP_ANGLE] == "slip_angle_est_rad"

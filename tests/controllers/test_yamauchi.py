@@ -7,9 +7,9 @@ import warnings
 
 import numpy as np
 import pytest
+from slipenv.controllers import YamauchiController, is_hurwitz
 
-from controllers import YamauchiController, is_hurwitz
-from controllers.observation import (
+from slipenv.contracts.observation import (
     OBS_CROSS_TRACK,
     OBS_CURVATURE,
     OBS_DIM,

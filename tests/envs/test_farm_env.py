@@ -8,9 +8,9 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
+from slipenv.estimators.lindgren_ekf import LindgrenEKF, Scheme
 
 import slipenv  # noqa: F401  (registers the envs)
-from estimators.lindgren_ekf import LindgrenEKF, Scheme
 from slipenv.run import baseline_controller
 
 N_STEPS = 300  # 15 s at 20 Hz: the first quarter circle, speed and slip settled

@@ -12,10 +12,10 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
+from slipenv.controllers.yamauchi import YamauchiController
 
 import slipenv  # noqa: F401
-from controllers.observation import OBS_SLIP_ANGLE
-from controllers.yamauchi import YamauchiController
+from slipenv.contracts.observation import OBS_SLIP_ANGLE
 from slipenv.envs.registration import yamauchi_observation
 from slipenv.experiments.yamauchi_runs import Settings, circle_episode
 from slipenv.run import baseline_controller

@@ -12,12 +12,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from slipenv.estimators.base import OdometryGeometry
+from slipenv.estimators.endo import endo_slip_velocities
+from slipenv.estimators.identification import SlipRun, true_slips
+from slipenv.estimators.yamauchi import rotation_radius_m
 
-from estimators.base import OdometryGeometry
-from estimators.endo import endo_slip_velocities
-from estimators.identification import SlipRun, true_slips
-from estimators.yamauchi import rotation_radius_m
-from slipenv.sensors.frame import SensorFrame
+from slipenv.contracts.frame import SensorFrame
 
 TREAD_M = 0.41  # [m] Yamauchi Table 1
 SPROCKET_RADIUS_M = 0.06  # [m] assumed (slipenv Patako preset)

@@ -7,8 +7,7 @@ import math
 import numpy as np
 import pytest
 from scipy import stats
-
-from estimators.consistency import (
+from slipenv.estimators.consistency import (
     ConsistencyReport,
     autocorrelation,
     autocorrelation_summary,

@@ -5,17 +5,17 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-
-from estimators.base import OdometryGeometry
-from estimators.endo import (
+from slipenv.estimators.base import OdometryGeometry
+from slipenv.estimators.endo import (
     EndoOdometry,
     endo_left_share,
     endo_ratio,
     endo_slip_ratios,
     endo_slip_velocities,
 )
-from estimators.gyrodometry import Gyrodometry
-from estimators.skid_steer import body_velocity
+from slipenv.estimators.gyrodometry import Gyrodometry
+from slipenv.estimators.skid_steer import body_velocity
+
 from tests.estimators import skid_steer_synth as synth
 
 TREAD = synth.TREAD_M

@@ -4,8 +4,7 @@ import json
 
 import numpy as np
 import pytest
-
-from estimators.identification import (
+from slipenv.estimators.identification import (
     SlipAngleModel,
     evaluate,
     evaluate_runs,
@@ -15,7 +14,8 @@ from estimators.identification import (
     train_test_split_runs,
     true_slips,
 )
-from estimators.skid_steer import body_velocity
+from slipenv.estimators.skid_steer import body_velocity
+
 from tests.estimators import skid_steer_synth as synth
 
 BETA_NOISE = 0.01  # [rad] motion-capture slip-angle noise

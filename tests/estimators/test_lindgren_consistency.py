@@ -8,19 +8,19 @@ import math
 
 import numpy as np
 import pytest
-
-from estimators import lindgren_models as lm
-from estimators.base import OdometryGeometry
-from estimators.consistency import (
+from slipenv.estimators import lindgren_models as lm
+from slipenv.estimators.base import OdometryGeometry
+from slipenv.estimators.consistency import (
     chi2_mean_band,
     consistency_report,
     nis,
     stack_innovations,
 )
-from estimators.lindgren_ekf import SENSORS, LindgrenEKF, LindgrenNoise, OracleSoil
-from estimators.lindgren_synth import simulate, straight_and_turn
+from slipenv.estimators.lindgren_ekf import SENSORS, LindgrenEKF, LindgrenNoise, OracleSoil
+from slipenv.estimators.lindgren_synth import simulate, straight_and_turn
+
+from slipenv.contracts.frame import SensorFrame
 from slipenv.sensors.beacons import BeaconScanner, default_beacons_xy
-from slipenv.sensors.frame import SensorFrame
 
 GEOM = OdometryGeometry(wheel_radius_m=0.275, track_width_m=1.5, counts_per_rad=285.0)
 TRUE_SOIL = OracleSoil(wheel_radius_m=(0.283, 0.287), k_s=(2500.0, 2200.0))  # Lindgren §3.2

@@ -10,14 +10,20 @@ import math
 import numpy as np
 import pytest
 from filterpy.kalman import ExtendedKalmanFilter
+from slipenv.estimators import lindgren_models as lm
+from slipenv.estimators import lindgren_observations as lo
+from slipenv.estimators.base import Estimator, OdometryGeometry
+from slipenv.estimators.lindgren_ekf import (
+    LindgrenEKF,
+    LindgrenNoise,
+    OracleSoil,
+    Scheme,
+    parse_scheme,
+)
+from slipenv.estimators.lindgren_synth import simulate, straight_and_turn
 
-from estimators import lindgren_models as lm
-from estimators import lindgren_observations as lo
-from estimators.base import Estimator, OdometryGeometry
-from estimators.lindgren_ekf import LindgrenEKF, LindgrenNoise, OracleSoil, Scheme, parse_scheme
-from estimators.lindgren_synth import simulate, straight_and_turn
+from slipenv.contracts.frame import SensorFrame
 from slipenv.sensors.beacons import BeaconScanner, default_beacons_xy
-from slipenv.sensors.frame import SensorFrame
 
 GEOM = OdometryGeometry(wheel_radius_m=0.275, track_width_m=1.5, counts_per_rad=285.0)
 CROSS = np.array([[10.0, 0.0], [0.0, 10.0], [-10.0, 0.0], [0.0, -10.0]])

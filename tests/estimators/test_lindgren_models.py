@@ -7,10 +7,9 @@ import math
 import numpy as np
 import pytest
 from filterpy.common import Q_continuous_white_noise
-
-from estimators import lindgren_models as lm
-from estimators import lindgren_observations as lo
-from estimators.lindgren_models import OracleSoil
+from slipenv.estimators import lindgren_models as lm
+from slipenv.estimators import lindgren_observations as lo
+from slipenv.estimators.lindgren_models import OracleSoil
 
 W = 1.5  # track width [m] (assumed vehicle)
 CPR = 285.0  # counts/rad (Lindgren)
@@ -197,7 +196,8 @@ def test_inertial_model_eq14() -> None:
 def test_bearing_model_and_residual() -> None:
     x = np.zeros(lm.N_BASE)
     beacons = np.array([[10.0, 10.0], [-10.0, 0.0]])
-    np.testing.assert_allclose(lo.bearing_hx(x, beacons), [math.pi / 4, -math.pi])
+    # one angle convention across slipenv: (-π, π], so straight behind is +π
+    np.testing.assert_allclose(lo.bearing_hx(x, beacons), [math.pi / 4, math.pi])
     x[lm.ITH] = math.pi / 2
     np.testing.assert_allclose(lo.bearing_hx(x, beacons), [-math.pi / 4, math.pi / 2])
     assert float(lo.bearing_residual(3.1, -3.1)) == pytest.approx(6.2 - 2.0 * math.pi)

@@ -4,8 +4,7 @@ import math
 
 import numpy as np
 import pytest
-
-from estimators.skid_steer import (
+from slipenv.estimators.skid_steer import (
     body_velocity,
     slips_from_body_velocity,
     track_ground_speeds,

@@ -5,16 +5,16 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-
-from estimators.base import Estimator
-from estimators.endo import EndoOdometry
-from estimators.gyrodometry import Gyrodometry
-from estimators.identification import SlipAngleModel, fit_endo_n, fit_slip_angle_runs
-from estimators.yamauchi import (
+from slipenv.estimators.base import Estimator
+from slipenv.estimators.endo import EndoOdometry
+from slipenv.estimators.gyrodometry import Gyrodometry
+from slipenv.estimators.identification import SlipAngleModel, fit_endo_n, fit_slip_angle_runs
+from slipenv.estimators.yamauchi import (
     SlipCompensatedOdometry,
     next_angular_displacement,
     rotation_radius_m,
 )
+
 from tests.estimators import skid_steer_synth as synth
 
 GEOM = synth.GEOMETRY

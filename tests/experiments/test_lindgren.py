@@ -8,14 +8,14 @@ import math
 
 import numpy as np
 import pytest
+from slipenv.estimators.base import OdometryGeometry
+from slipenv.estimators.lindgren_ekf import LindgrenEKF, LindgrenNoise, Scheme
 
-from estimators.base import OdometryGeometry
-from estimators.lindgren_ekf import LindgrenEKF, LindgrenNoise, Scheme
+from slipenv.contracts.frame import SensorFrame
 from slipenv.experiments import experiment, lindgren
 from slipenv.experiments import lindgren_report as report
 from slipenv.experiments.lindgren_report import finite
 from slipenv.paths import path_by_name
-from slipenv.sensors.frame import SensorFrame
 
 REQUIRED = {
     "mean_deviation_m": {"scheme3", "scheme4"},

@@ -9,8 +9,8 @@ from __future__ import annotations
 import json
 
 import pytest
+from slipenv.estimators.identification import SlipAngleModel
 
-from estimators.identification import SlipAngleModel
 from slipenv.cli import main
 from slipenv.envs.registration import yamauchi_observation
 from slipenv.experiments import yamauchi

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import slipenv  # noqa: F401  (registers the envs)
+from slipenv.contracts.frame import SensorFrame
 from slipenv.logs import LogFormatError, read_log, write_log
 from slipenv.logs.export import LogRecorder, export_episode, meta_for
-from slipenv.sensors.frame import SensorFrame
 from slipenv.terrain.terrain import TerrainSpec
 from slipenv.vehicles.presets import farm_2wd, rover_4ws
 

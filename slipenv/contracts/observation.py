@@ -1,7 +1,8 @@
 """The observation and action layout shared by the environments and the controllers.
 
 The environment builds the observation from its *estimated* pose (never ground truth) and the
-path projection; the env imports these indices from here so the two sides cannot drift apart.
+path projection with :func:`build_observation`, the one place that does so; the controllers read
+it by the indices defined here, so the two sides cannot drift apart.
 
 Observation, float32, shape (12,):
 
@@ -34,6 +35,8 @@ from typing import Protocol
 
 import numpy as np
 
+from slipenv.contracts.angles import wrap_angle
+
 OBS_X = 0
 OBS_Y = 1
 OBS_COS_YAW = 2
@@ -52,6 +55,12 @@ OBS_NAMES = ("x_m", "y_m", "cos_yaw", "sin_yaw", "speed_mps", "yaw_rate_rps",
              "slip_angle_est_rad", "cross_track_m", "heading_error_rad", "path_curvature_1pm",
              "ref_speed_mps", "progress")
 
+# Physical bounds of each entry; the env clips to them and declares them as its Box.
+OBS_LOW = np.array([-1e4, -1e4, -1, -1, -50, -20, -math.pi, -1e4, -math.pi, -1e3, 0, 0],
+                   dtype=np.float32)
+OBS_HIGH = np.array([1e4, 1e4, 1, 1, 50, 20, math.pi, 1e4, math.pi, 1e3, 50, 1],
+                    dtype=np.float32)
+
 ACT_SPEED = 0
 ACT_YAW_RATE = 1
 ACT_DIM = 2
@@ -67,11 +76,6 @@ class ProjectionLike(Protocol):
     curvature_1pm: float
     speed_mps: float
     remaining_m: float
-
-
-def wrap_to_pi(angle: np.ndarray | float) -> np.ndarray | float:
-    """Wrap angles [rad] to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
 
 
 def build_observation(x_m: float, y_m: float, yaw_rad: float, speed_mps: float,
@@ -91,10 +95,19 @@ def build_observation(x_m: float, y_m: float, yaw_rad: float, speed_mps: float,
     Returns
     -------
     np.ndarray, shape (12,), float32
+        Clipped to ``[OBS_LOW, OBS_HIGH]``.
+
+    Raises
+    ------
+    FloatingPointError
+        If an entry is NaN or infinite (a diverged estimator must not reach a policy).
     """
     total = projection.s + projection.remaining_m
     obs = (x_m, y_m, math.cos(yaw_rad), math.sin(yaw_rad), speed_mps, yaw_rate_rps,
            slip_angle_est_rad, projection.cross_track_m,
-           float(wrap_to_pi(yaw_rad - projection.heading_rad)), projection.curvature_1pm,
+           wrap_angle(yaw_rad - projection.heading_rad), projection.curvature_1pm,
            projection.speed_mps, projection.s / total if total > 0.0 else 1.0)
-    return np.asarray(obs, dtype=np.float32)
+    out = np.asarray(obs, dtype=np.float32)
+    if not np.all(np.isfinite(out)):
+        raise FloatingPointError(f"non-finite observation: {out.tolist()}")
+    return np.clip(out, OBS_LOW, OBS_HIGH)
