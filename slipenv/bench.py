@@ -30,39 +30,38 @@ def bench_env(env_id: str, steps: int = 200, repeats: int = 5) -> dict:
     env = gym.make(env_id)
     try:
         base = env.unwrapped
-        sim = base.sim
+        client, substeps = base.physics_client_id, base.substeps_per_step
         env.reset(seed=0)
         action = np.array([0.5, 0.1], dtype=np.float32)
         for _ in range(10):  # warm-up: caches, first contacts
             env.step(action)
         env_rates, bare_rates = [], []
         for _ in range(repeats):
-            state = p.saveState(physicsClientId=sim.client)
+            state = p.saveState(physicsClientId=client)
             t0 = time.perf_counter()
             for _ in range(steps):
                 _, _, terminated, truncated, _ = env.step(action)
                 if terminated or truncated:
                     env.reset(seed=0)
             env_rates.append(steps / (time.perf_counter() - t0))
-            p.restoreState(state, physicsClientId=sim.client)
-            n_bare = steps * sim.substeps
-            client = sim.client
+            p.restoreState(state, physicsClientId=client)
+            n_bare = steps * substeps
             t0 = time.perf_counter()
             for _ in range(n_bare):
                 p.stepSimulation(physicsClientId=client)
             bare_rates.append(n_bare / (time.perf_counter() - t0))
-            p.restoreState(state, physicsClientId=sim.client)
-            p.removeState(state, physicsClientId=sim.client)
+            p.restoreState(state, physicsClientId=client)
+            p.removeState(state, physicsClientId=client)
         env_rate = statistics.median(env_rates)
         bare_rate = statistics.median(bare_rates)
         return {
             "env_steps_per_s": round(env_rate, 2),
-            "substeps_per_step": sim.substeps,
+            "substeps_per_step": substeps,
             "bare_substeps_per_s": round(bare_rate, 1),
-            "ratio": round(env_rate * sim.substeps / bare_rate, 3),
-            "vehicle": base.spec_vehicle.name,
-            "wheels": len(base.spec_vehicle.wheels),
-            "realtime_factor": round(env_rate * base.dt_s, 2),
+            "ratio": round(env_rate * substeps / bare_rate, 3),
+            "vehicle": base.vehicle.name,
+            "wheels": len(base.vehicle.wheels),
+            "realtime_factor": round(env_rate * base.control_dt_s, 2),
         }
     finally:
         env.close()

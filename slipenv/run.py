@@ -52,9 +52,9 @@ def baseline_controller(env: gym.Env, name: str = "yamauchi", **kwargs: Any):
     per metre travelled.
     """
     base = env.unwrapped
-    spec = base.spec_vehicle
+    spec = base.vehicle
     common = dict(v_max_mps=spec.max_speed_mps, omega_max_rps=spec.max_yaw_rate_rad_s,
-                  dt_s=base.dt_s)
+                  dt_s=base.control_dt_s)
     if name == "yamauchi":
         v_ref = max(float(base.path.speed_at(0.0)), 1e-3)
         pole = min(max(v_ref / 0.6, 0.15), 1.0)
@@ -74,7 +74,7 @@ def run_episode(env_id: str, seed: int = 0, controller: str = "yamauchi",
         limit = max_steps or env.spec.max_episode_steps or 10_000
         rows: dict[str, list] = {k: [] for k in (
             "t", "true", "est", "ct", "slip", "beta", "act", "rew")}
-        spec = env.unwrapped.spec_vehicle
+        spec = env.unwrapped.vehicle
         driven = [k for k, w in enumerate(spec.wheels) if w.role == "driven"]
         # Plain dead reckoning on the very same sensor frames: what slip does to naive odometry.
         naive = DeadReckoning(odometry_geometry(spec))

@@ -23,6 +23,7 @@ from slipenv.paths import Path, path_by_name
 from slipenv.sensors.onboard import SensorSuite
 from slipenv.sim.simulator import PhysicsBlowUp, Simulator, VehicleTruth
 from slipenv.vehicles.kinematics import twist_to_commands
+from slipenv.vehicles.spec import VehicleSpec
 
 
 class SlipEnv(gym.Env):
@@ -96,22 +97,61 @@ class SlipEnv(gym.Env):
             raise ValueError(
                 f"unknown estimator {cfg.estimator!r}; known estimators: {sorted(ESTIMATORS)}"
             )
-        self.spec_vehicle = make_vehicle(cfg.vehicle)
-        self.path = self._make_path(cfg)
+        self._vehicle = make_vehicle(cfg.vehicle)
+        self._path = self._make_path(cfg)
         soil_map = make_soil_map(cfg.soil, cfg.soil_map)
-        force_model = make_force_model(cfg.force_model, self.spec_vehicle)
-        self.sim = Simulator(
-            self.spec_vehicle, cfg.terrain, force_model, soil_map, physics_hz=cfg.physics_hz,
+        force_model = make_force_model(cfg.force_model, self._vehicle)
+        self._sim = Simulator(
+            self._vehicle, cfg.terrain, force_model, soil_map, physics_hz=cfg.physics_hz,
             control_hz=cfg.control_hz, gui=render_mode == "human",
         )
-        self.dt_s = self.sim.control_dt_s
-        self.max_steps = int(math.ceil(cfg.max_episode_s / self.dt_s))
-        self.sensors = SensorSuite(self.spec_vehicle.counts_per_rad, cfg.sensor_noise,
+        self._dt_s = self._sim.control_dt_s
+        self.max_steps = int(math.ceil(cfg.max_episode_s / self._dt_s))
+        self._sensors = SensorSuite(self._vehicle.counts_per_rad, cfg.sensor_noise,
                                    beacons=self._make_beacons(cfg))
         self.observation_space = spaces.Box(OBS_LOW, OBS_HIGH, dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         self.estimator = None
         self._truth: VehicleTruth | None = None
+
+    # -- read-only surface for experiments and tools ----------------------------------------
+    @property
+    def vehicle(self) -> VehicleSpec:
+        """The vehicle's spec (geometry, motors, sensors' resolution)."""
+        return self._vehicle
+
+    @property
+    def path(self) -> Path:
+        """The reference path of the task."""
+        return self._path
+
+    @property
+    def control_dt_s(self) -> float:
+        """Control period: simulated time of one ``step`` [s]."""
+        return self._dt_s
+
+    @property
+    def substeps_per_step(self) -> int:
+        """Physics substeps per ``step`` (the force law runs at every one)."""
+        return self._sim.substeps
+
+    @property
+    def physics_client_id(self) -> int:
+        """The PyBullet client of this env's world (for benchmarks and rendering)."""
+        return self._sim.client
+
+    @property
+    def beacons_xy(self) -> np.ndarray | None:
+        """Surveyed beacon positions, shape (n, 2) [m], or None without a beacon scanner."""
+        beacons = self._sensors.beacons
+        return None if beacons is None else beacons.beacons_xy.copy()
+
+    def true_soil(self):
+        """The soil the wheels are on now, in the estimators' terms (for oracle filters only;
+        see :func:`slipenv.envs.estimation.true_soil_for_oracle`)."""
+        from slipenv.envs.estimation import true_soil_for_oracle
+
+        return true_soil_for_oracle(self._sim, self.config.sensor_noise.torque_scale)
 
     # -- construction hooks (overridable by subclasses) ------------------------------------
     def _make_path(self, cfg: SlipEnvConfig) -> Path:
@@ -133,13 +173,13 @@ class SlipEnv(gym.Env):
     # -- gymnasium API ---------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        x0, y0, yaw0 = self.path.start_pose()
-        truth = self.sim.reset(x0, y0, yaw0)
+        x0, y0, yaw0 = self._path.start_pose()
+        truth = self._sim.reset(x0, y0, yaw0)
         self._truth = truth
-        self.sensors.reset()
-        frame = self.sensors.measure(truth, self.np_random)
+        self._sensors.reset()
+        frame = self._sensors.measure(truth, self.np_random)
         self.estimator = make_estimator(
-            self.config.estimator, self.spec_vehicle, self._estimator_context(),
+            self.config.estimator, self._vehicle, self._estimator_context(),
             **self.config.estimator_kwargs,
         )
         estimate = self.estimator.reset(x0, y0, yaw0, frame)
@@ -158,44 +198,44 @@ class SlipEnv(gym.Env):
         if self.estimator is None:
             raise RuntimeError("call reset() before step()")
         a = np.clip(action, -1.0, 1.0)
-        spec = self.spec_vehicle
+        spec = self._vehicle
         speeds, steer = twist_to_commands(
             spec, float(a[0]) * spec.max_speed_mps, float(a[1]) * spec.max_yaw_rate_rad_s
         )
         self._steps += 1
         try:
-            truth = self.sim.step(speeds, steer)
+            truth = self._sim.step(speeds, steer)
         except PhysicsBlowUp as exc:
             obs = self._observe(self._last_estimate)
             info = {"truncation_reason": f"physics blow-up: {exc}", "reward_terms": {}}
             return obs, 0.0, False, True, info
         self._truth = truth
-        frame = self.sensors.measure(truth, self.np_random)
+        frame = self._sensors.measure(truth, self.np_random)
         estimate = self.estimator.update(frame)
         obs = self._observe(estimate)
 
         x, y, _ = truth.position_m
-        proj = self.path.project(x, y, s_hint=self._s_true)
+        proj = self._path.project(x, y, s_hint=self._s_true)
         gained = max(proj.s - self._s_true, 0.0)
         self._s_true = proj.s
         heading_err = wrap_angle(truth.yaw_rad - proj.heading_rad)
         terms = {
             "cross_track": -(proj.cross_track_m**2),
             "heading": -(heading_err**2),
-            "progress": gained / max(proj.speed_mps * self.dt_s, 1e-6),
+            "progress": gained / max(proj.speed_mps * self._dt_s, 1e-6),
             "effort": -float(np.sum((a - self._last_action) ** 2)),
         }
         weights = self.config.reward_weights
         reward = float(sum(weights.get(k, 0.0) * v for k, v in terms.items()))
         self._last_action = a.astype(np.float32)
-        done_path = self._s_true >= self.path.length_m - 1e-3
+        done_path = self._s_true >= self._path.length_m - 1e-3
         lost = abs(proj.cross_track_m) > self.config.max_cross_track_m
         truncated = self._steps >= self.max_steps and not (done_path or lost)
         extra = {
             "reward_terms": terms,
             "cross_track_true_m": proj.cross_track_m,
             "heading_error_true_rad": heading_err,
-            "progress_true": self._s_true / self.path.length_m,
+            "progress_true": self._s_true / self._path.length_m,
             "is_success": bool(done_path),
         }
         if lost:
@@ -209,40 +249,37 @@ class SlipEnv(gym.Env):
         if self.render_mode != "rgb_array" or self._truth is None:
             return None
         x, y, z = self._truth.position_m
-        size = max(self.spec_vehicle.chassis_size_m)
+        size = max(self._vehicle.chassis_size_m)
         view = p.computeViewMatrixFromYawPitchRoll(
             [x, y, z], 4.0 * size, math.degrees(self._truth.yaw_rad) - 90.0, -30.0, 0.0, 2,
-            physicsClientId=self.sim.client,
+            physicsClientId=self._sim.client,
         )
         proj = p.computeProjectionMatrixFOV(60.0, 4 / 3, 0.05, 100.0,
-                                            physicsClientId=self.sim.client)
+                                            physicsClientId=self._sim.client)
         _, _, rgba, _, _ = p.getCameraImage(
-            320, 240, view, proj, renderer=p.ER_TINY_RENDERER, physicsClientId=self.sim.client
+            320, 240, view, proj, renderer=p.ER_TINY_RENDERER, physicsClientId=self._sim.client
         )
         return np.asarray(rgba, dtype=np.uint8).reshape(240, 320, 4)[:, :, :3]
 
     def close(self) -> None:
         if getattr(self, "sim", None) is not None:
-            self.sim.close()
-            self.sim = None
+            self._sim.close()
+            self._sim = None
 
     # -- helpers ---------------------------------------------------------------------------
     def _estimator_context(self) -> dict:
         """What an estimator may be told beyond the nominal geometry: the control period, the
         surveyed beacon positions, and (for ``*_oracle`` estimators only) the true soil."""
-        from slipenv.envs.estimation import true_soil_for_oracle
-
-        beacons = self.sensors.beacons
+        beacons = self._sensors.beacons
         return {
-            "dt_s": self.dt_s,
+            "dt_s": self._dt_s,
             "beacons_xy": None if beacons is None else beacons.beacons_xy,
-            "true_soil": lambda: true_soil_for_oracle(
-                self.sim, self.config.sensor_noise.torque_scale),
+            "true_soil": self.true_soil,
         }
 
     def _observe(self, estimate: PoseEstimate) -> np.ndarray:
         self._last_estimate = estimate
-        proj = self.path.project(estimate.x_m, estimate.y_m, s_hint=self._s_est)
+        proj = self._path.project(estimate.x_m, estimate.y_m, s_hint=self._s_est)
         self._s_est = proj.s
         try:
             return build_observation(estimate.x_m, estimate.y_m, estimate.yaw_rad,
@@ -252,7 +289,7 @@ class SlipEnv(gym.Env):
             raise FloatingPointError(f"the estimator diverged: {exc}") from None
 
     def _info(self, truth: VehicleTruth, estimate: PoseEstimate, frame, extra: dict) -> dict:
-        contact = self.sim.injector.contact_state()
+        contact = self._sim.injector.contact_state()
         x, y, _ = truth.position_m
         info = {
             "t_s": truth.t_s,

@@ -87,7 +87,7 @@ import gymnasium as gym
 import numpy as np
 
 from slipenv.contracts.frame import SensorFrame
-from slipenv.envs.estimation import default_k_s_prior, odometry_geometry, true_soil_for_oracle
+from slipenv.envs.estimation import default_k_s_prior, odometry_geometry
 from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.consistency import chi2_mean_band, consistency_report, nees
 from slipenv.estimators.lindgren_ekf import LindgrenEKF, LindgrenNoise, OracleSoil
@@ -194,14 +194,14 @@ def record(path: Path, seed: int, progress: bool = False) -> Recording:
                 bar.update(1)
         if bar is not None:
             bar.close()
-        spec = base.spec_vehicle
+        spec = base.vehicle
         k_s0 = default_k_s_prior(spec)
         return Recording(
             path=path, frames=frames, t_s=np.array([f.t_s for f in frames]),
             truth=np.array(truth), s_true_m=np.array(s_true),
-            oracle=true_soil_for_oracle(base.sim, base.config.sensor_noise.torque_scale),
+            oracle=base.true_soil(),
             params=LindgrenNoise(k_s0=k_s0, **FILTER),
-            geometry=odometry_geometry(spec), beacons_xy=base.sensors.beacons.beacons_xy)
+            geometry=odometry_geometry(spec), beacons_xy=base.beacons_xy)
 
 
 def run_filter(rec: Recording, name: str, cut_s: float = math.inf,

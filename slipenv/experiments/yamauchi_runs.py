@@ -107,13 +107,13 @@ def rotation_run(cfg: Settings, tilt_deg: float, rate_dps: float, direction: int
     """Drive a constant twist (5 cm/s, ±rate) from rest until the true heading turned 90°."""
     env = make_world(tilt_deg, path=straight(5.0, cfg.speed_mps, heading_rad),
                      estimator="gyrodometry", estimator_kwargs={}, max_cross_track_m=10.0)
-    spec = env.unwrapped.spec_vehicle
+    spec = env.unwrapped.vehicle
     action = np.array([cfg.speed_mps / spec.max_speed_mps,
                        direction * math.radians(rate_dps) / spec.max_yaw_rate_rad_s],
                       dtype=np.float32)
     _, info = env.reset(seed=seed)
     rows, turned = [info], 0.0
-    for _ in range(int(cfg.max_rotation_s / env.unwrapped.dt_s)):
+    for _ in range(int(cfg.max_rotation_s / env.unwrapped.control_dt_s)):
         _, _, terminated, truncated, info = env.step(action)
         turned += wrap_angle(info["true_pose"][2] - rows[-1]["true_pose"][2])
         rows.append(info)
@@ -230,15 +230,15 @@ def circle_episode(cfg: Settings, pole_rps: float, feedforward: bool, estimator:
                      estimator=estimator, estimator_kwargs=estimator_kwargs)
     base = env.unwrapped
     policy = YamauchiController.from_poles(
-        pole_rps, cfg.speed_mps, v_max_mps=base.spec_vehicle.max_speed_mps,
-        omega_max_rps=base.spec_vehicle.max_yaw_rate_rad_s, dt_s=base.dt_s,
+        pole_rps, cfg.speed_mps, v_max_mps=base.vehicle.max_speed_mps,
+        omega_max_rps=base.vehicle.max_yaw_rate_rad_s, dt_s=base.control_dt_s,
         use_feedforward=feedforward)
     obs, info = env.reset(seed=seed)
     policy.reset()
     oracle, odometry, est = TrueSlipAngle(), None, None
     if steer_on == "true_beta":
         odometry = SlipCompensatedOdometry(
-            odometry_geometry(base.spec_vehicle), estimator_kwargs["n"], oracle,
+            odometry_geometry(base.vehicle), estimator_kwargs["n"], oracle,
             max_slip_angle_rad=ORACLE_MAX_SLIP_ANGLE_RAD)
         est = odometry.reset(*info["true_pose"], info["sensors"])
     true_xy, est_xy, ct = [], [], []

@@ -136,7 +136,7 @@ def export_episode(env, policy: Callable[[np.ndarray], Any] | None = None,
     if (policy is None) == (actions is None):
         raise ValueError("give exactly one of policy and actions")
     base = env.unwrapped
-    spec, cfg = base.spec_vehicle, base.config
+    spec, cfg = base.vehicle, base.config
     soil = cfg.soil if isinstance(cfg.soil, str) else getattr(cfg.soil, "name", "custom")
     meta = meta_for(spec, cfg.terrain, soil, counts_per_rad=cfg.sensor_noise.counts_per_rad,
                     notes=notes, simulation={"env": getattr(env.spec, "id", None), "seed": seed,

@@ -15,8 +15,8 @@ from slipenv.controllers import (
     build_observation,
     controller_by_name,
 )
-from slipenv.contracts import observation as ob
 
+from slipenv.contracts import observation as ob
 from slipenv.paths import circle, straight
 
 

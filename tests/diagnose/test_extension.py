@@ -32,7 +32,7 @@ def travelled(env, steps=40) -> tuple[float, float]:
     for _ in range(steps):
         _, _, _, _, info = env.step(np.array([0.4, 0.0], dtype=np.float32))
     counts = np.mean(info["sensors"].enc_counts) - counts0
-    angle = counts / env.unwrapped.spec_vehicle.counts_per_rad
+    angle = counts / env.unwrapped.vehicle.counts_per_rad
     return float(np.hypot(*(info["true_pose"][:2] - start))), float(angle)
 
 
@@ -42,7 +42,7 @@ def test_make_with_model_changes_the_world():
     plain, extended = make(), make(model=model)
     try:
         u = extended.unwrapped
-        assert [w.rolling_radius_m for w in u.spec_vehicle.wheels][:2] == [0.30, 0.30]
+        assert [w.rolling_radius_m for w in u.vehicle.wheels][:2] == [0.30, 0.30]
         assert u.config.sensor_noise.gyro_bias_rad_s == 0.02
         assert u.config.model is None  # applied once
         d0, a0 = travelled(plain)
