@@ -122,6 +122,12 @@ class SlipEnvConfig:
             for key in ("reward_weights",):
                 if key in merged:
                     merged[key] = {**getattr(base, key), **merged[key]}
+            # A preset's options belong to its path and estimator: choosing another one by
+            # name starts from that one's own defaults.
+            for choice, options in (("path", "path_kwargs"), ("estimator", "estimator_kwargs")):
+                if (choice in merged and options not in merged
+                        and merged[choice] != getattr(base, choice)):
+                    merged[options] = {}
             return replace(base, **merged)
         return cls(**merged)
 

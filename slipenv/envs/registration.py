@@ -19,12 +19,15 @@ id                                     task
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import warnings
 from importlib import resources
 
 import gymnasium as gym
+
+from slipenv.envs.config import SlipEnvConfig
 
 ENTRY_POINT = "slipenv.envs.slip_env:SlipEnv"
 # Fitted by ``slipenv reproduce yamauchi --save-model``; shipped in slipenv/data.
@@ -82,13 +85,34 @@ PRESETS: dict[str, dict] = {
 }
 
 
+def preset_config(env_id: str) -> SlipEnvConfig:
+    """The configuration a registered id starts from (``gymnasium.make(env_id)``).
+
+    Raises
+    ------
+    ValueError
+        If ``env_id`` is not a slipenv id (the message lists them).
+    """
+    if env_id not in PRESETS:
+        close = difflib.get_close_matches(env_id, sorted(PRESETS), n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        raise ValueError(f"unknown slipenv env id {env_id!r}{hint} Known ids: {sorted(PRESETS)}")
+    return SlipEnvConfig.from_kwargs(None, **PRESETS[env_id])
+
+
 def register_envs() -> None:
-    """Register every slipenv environment id with Gymnasium (idempotent)."""
+    """Register every slipenv environment id with Gymnasium (idempotent).
+
+    Each id is registered with one kwarg, ``config``: its preset :class:`SlipEnvConfig`.
+    ``gymnasium.make(id, **kwargs)`` overrides fields of that preset;
+    ``gymnasium.make(id, config=cfg)`` replaces it (e.g. with a model fitted by
+    ``slipenv diagnose``, see :func:`slipenv.diagnose.apply_model`).
+    """
     for env_id, kwargs in PRESETS.items():
         if env_id in gym.registry:
             continue
         steps = int(math.ceil(kwargs["max_episode_s"] * 20.0))
         gym.register(
-            id=env_id, entry_point=ENTRY_POINT, kwargs=dict(kwargs),
+            id=env_id, entry_point=ENTRY_POINT, kwargs={"config": preset_config(env_id)},
             max_episode_steps=steps, disable_env_checker=False,
         )

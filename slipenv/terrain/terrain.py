@@ -12,7 +12,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
 
 TERRAIN_KINDS = ("flat", "slope", "mounds")
 
@@ -122,6 +121,8 @@ def _mound_heights(spec: TerrainSpec, x: np.ndarray, y: np.ndarray) -> np.ndarra
 
 def build_terrain(spec: TerrainSpec, client: int) -> Terrain:
     """Create the ground body in ``client``; its friction is zero (the force law carries it)."""
+    import pybullet as p  # imported here: a spec alone must not load the physics engine
+
     if spec.kind == "mounds":
         n = int(round(spec.size_m / spec.resolution_m)) + 1
         axis = np.linspace(-spec.size_m / 2, spec.size_m / 2, n)
