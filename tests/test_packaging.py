@@ -58,10 +58,10 @@ def test_installed_wheel_imports_only_under_slipenv(wheel, tmp_path):
                     str(site), str(wheel)], check=True, capture_output=True)
     script = (
         "import importlib.util, slipenv.estimators, slipenv.controllers, slipenv.agents\n"
-        "assert slipenv.estimators.__file__.startswith(%r), slipenv.estimators.__file__\n"
+        f"assert slipenv.estimators.__file__.startswith({str(site)!r})\n"
         "for bare in ('estimators', 'controllers', 'agents'):\n"
         "    assert importlib.util.find_spec(bare) is None, bare\n"
-        "print('ok')\n" % str(site)
+        "print('ok')\n"
     )
     # Run outside the repository, the wheel's folder first on the path.
     done = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True,
