@@ -2,6 +2,13 @@
 
 action = clip(baseline(obs) + scale * residual, -1, 1). With a zero residual the wrapped env
 behaves exactly like the baseline controller, so training starts from a working policy.
+
+Two faces of the same composition (:func:`compose_residual`):
+
+- :class:`ResidualActionWrapper` wraps an env for training: the agent's action *is* the
+  residual;
+- :class:`ResidualPolicy` wraps a trained model for use on the *plain* env: its ``predict``
+  returns the composed action, so it is evaluated, exported or rolled out like any controller.
 """
 
 from __future__ import annotations
@@ -10,8 +17,21 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from slipenv.controllers.baseline import baseline_controller
 
-from slipenv.run import baseline_controller
+
+def _check_scale(scale: float) -> float:
+    scale = float(scale)
+    if not (0.0 < scale <= 1.0):
+        raise ValueError(f"scale must be in (0, 1], got {scale!r}")
+    return scale
+
+
+def compose_residual(base_action: np.ndarray, residual: np.ndarray, scale: float) -> np.ndarray:
+    """clip(base + scale * residual, -1, 1) as float32 (any matching shapes)."""
+    out = np.asarray(base_action, dtype=np.float32) + scale * np.asarray(residual,
+                                                                          dtype=np.float32)
+    return np.clip(out, -1.0, 1.0).astype(np.float32)
 
 
 class ResidualActionWrapper(gym.ActionWrapper):
@@ -24,15 +44,15 @@ class ResidualActionWrapper(gym.ActionWrapper):
     scale : float
         Residual authority as a fraction of the action range (0 < scale <= 1).
     controller : str
-        Baseline controller name (``slipenv.run.baseline_controller``).
+        Baseline controller name (``slipenv.controllers.baseline.BASELINE_NAMES``).
+    **controller_kwargs
+        Passed to :func:`~slipenv.controllers.baseline.baseline_controller`.
     """
 
     def __init__(self, env: gym.Env, scale: float = 0.3, controller: str = "yamauchi",
                  **controller_kwargs: Any) -> None:
         super().__init__(env)
-        if not (0.0 < scale <= 1.0):
-            raise ValueError(f"scale must be in (0, 1], got {scale!r}")
-        self.scale = float(scale)
+        self.scale = _check_scale(scale)
         self.baseline = baseline_controller(env, controller, **controller_kwargs)
         self._obs: np.ndarray | None = None
 
@@ -51,6 +71,45 @@ class ResidualActionWrapper(gym.ActionWrapper):
     def action(self, action: np.ndarray) -> np.ndarray:
         if self._obs is None:
             raise RuntimeError("call reset() before step()")
-        base = self.baseline.act(self._obs)
-        return np.clip(base + self.scale * np.asarray(action, dtype=np.float32), -1.0,
-                       1.0).astype(np.float32)
+        return compose_residual(self.baseline.act(self._obs), action, self.scale)
+
+
+class ResidualPolicy:
+    """A trained residual model and the baseline, composed into one policy for the plain env.
+
+    Parameters
+    ----------
+    model : object with SB3's ``predict``
+        Trained on a :class:`ResidualActionWrapper` env.
+    baseline : Controller
+        The baseline it was trained on (``baseline_controller(env, controller)``).
+    scale : float
+        The wrapper's ``scale`` at training time.
+
+    Notes
+    -----
+    Follows SB3's ``PolicyPredictor`` protocol (``predict``) and has ``act`` and ``reset``
+    like the controllers; call ``reset`` at each episode start (``slipenv.rollout`` does).
+    """
+
+    def __init__(self, model: Any, baseline: Any, scale: float = 0.3) -> None:
+        if not hasattr(model, "predict"):
+            raise TypeError(f"model needs SB3's predict(), got {type(model).__name__}")
+        self.model, self.baseline, self.scale = model, baseline, _check_scale(scale)
+
+    def reset(self) -> None:
+        """Forget the baseline's internal state (a new episode starts)."""
+        self.baseline.reset()
+
+    def predict(self, observation: np.ndarray, state: tuple[np.ndarray, ...] | None = None,
+                episode_start: np.ndarray | None = None, deterministic: bool = True,
+                ) -> tuple[np.ndarray, tuple[np.ndarray, ...] | None]:
+        """The composed action; ``state`` is the baseline's (the model is an MLP)."""
+        base, base_state = self.baseline.predict(observation, state, episode_start,
+                                                 deterministic)
+        residual, _ = self.model.predict(observation, deterministic=deterministic)
+        return compose_residual(base, residual, self.scale), base_state
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """Action for one observation (or a batch)."""
+        return self.predict(obs)[0]

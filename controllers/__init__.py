@@ -1,7 +1,8 @@
 """Control laws as policies: ``act(obs) -> action`` and stable-baselines3's ``predict``.
 
 Controllers read the observation laid out in :mod:`slipenv.contracts.observation` and return
-``[v / v_max, omega / omega_max]`` as float32 in [-1, 1]^2.
+``[v / v_max, omega / omega_max]`` as float32 in [-1, 1]^2. :func:`baseline_controller` builds
+an env's path-following baseline from the env's public surface (vehicle, path, control period).
 """
 
 from __future__ import annotations
@@ -9,6 +10,7 @@ from __future__ import annotations
 from slipenv.contracts.observation import OBS_DIM, OBS_NAMES, build_observation
 
 from .base import Controller, Policy
+from .baseline import BASELINE_NAMES, baseline_controller
 from .pure_pursuit import PurePursuitController
 from .stanley import StanleyController
 from .yamauchi import YamauchiController, is_hurwitz
@@ -38,6 +40,7 @@ def controller_by_name(name: str, **kw: object) -> Controller:
 
 
 __all__ = [
+    "BASELINE_NAMES",
     "CONTROLLERS",
     "OBS_DIM",
     "OBS_NAMES",
@@ -46,6 +49,7 @@ __all__ = [
     "PurePursuitController",
     "StanleyController",
     "YamauchiController",
+    "baseline_controller",
     "build_observation",
     "controller_by_name",
     "is_hurwitz",

@@ -2,7 +2,8 @@
 
 Estimators eat :class:`slipenv.contracts.SensorFrame` readings and never see PyBullet or
 ground truth. The environment calls ``reset`` once per episode with the known start pose and
-``update`` once per control step; the returned :class:`slipenv.contracts.PoseEstimate` becomes the observation.
+``update`` once per control step; the returned :class:`slipenv.contracts.PoseEstimate` becomes
+the observation.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from slipenv.contracts import SensorFrame
+from slipenv.contracts import PoseEstimate, SensorFrame
 
 
 @dataclass(frozen=True)
@@ -63,8 +64,6 @@ class Estimator(Protocol):
     def update(self, frame: SensorFrame) -> PoseEstimate:
         """Take the next frame (time strictly increasing) and return the new estimate."""
         ...
-
-
 
 
 def check_frame_time(previous_t_s: float | None, frame: SensorFrame) -> float:

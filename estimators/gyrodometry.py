@@ -5,9 +5,10 @@ of the two track displacements (no slip), the heading change is the integrated g
 position advances along the midpoint heading (the exact arc for a constant-curvature step).
 
 :class:`Gyrodometry` is also the template of the skid-steer slip odometries
-(:class:`slipenv.estimators.endo.EndoOdometry`, :class:`slipenv.estimators.yamauchi.SlipCompensatedOdometry`):
-they override one hook, :meth:`Gyrodometry._translation`, that turns the step's track
-displacements and gyro heading change into a body-x displacement and a slip angle.
+(:class:`~slipenv.estimators.skid_steer.endo.EndoOdometry`,
+:class:`~slipenv.estimators.skid_steer.yamauchi.SlipCompensatedOdometry`): they override one
+hook, :meth:`Gyrodometry._translation`, that turns the step's track displacements and gyro
+heading change into a body-x displacement and a slip angle.
 """
 
 from __future__ import annotations

@@ -1,161 +1,377 @@
 """The ``slipenv`` command line.
 
-``slipenv run ENV_ID``    a baseline controller drives one episode: table + trajectory plot.
-``slipenv bench``         env steps/s next to bare ``stepSimulation`` of the same world.
+``slipenv run ENV_ID``      a baseline controller drives one episode: table + trajectory plot.
+``slipenv bench [ENV_ID]``  env steps/s next to bare ``stepSimulation`` of the same world.
 ``slipenv reproduce NAME``  a source paper's experiment re-run: paper vs simulation.
-``slipenv diagnose LOG``  what a measured log says the simulation gets wrong, and the fix.
-``slipenv train ENV_ID``  a stable-baselines3 agent, evaluated next to the baseline.
-``slipenv list``          registered environment ids.
+``slipenv diagnose LOG``    what a measured log says the simulation gets wrong, and the fix.
+``slipenv train ENV_ID``    a stable-baselines3 agent, evaluated next to the baseline.
+``slipenv evaluate ENV_ID`` a policy over seeds: true-pose metrics, table, plot, JSON, TUM.
+``slipenv sweep GRID.yaml`` an evaluation grid, on local processes or Ray; resumable.
+``slipenv list``            registered environment ids.
+
+Every input is checked before any long work starts (env ids against the Gymnasium registry,
+numbers, output paths by writing to them); a bad one exits with status 2 and one line.
 """
 
 from __future__ import annotations
 
 import argparse
+import difflib
 import json
 import sys
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, Protocol
 
 import gymnasium as gym
 
-import slipenv  # noqa: F401  (registers the envs)
+import slipenv
+from slipenv.evaluation import evaluate_cli, sweep_cli
 
 
-def _env_ids() -> list[str]:
-    return sorted(e for e in gym.registry if e.startswith("slipenv/"))
+class SubParsers(Protocol):
+    """What ``ArgumentParser.add_subparsers()`` returns, as far as a builder needs it."""
+
+    def add_parser(self, name: str, **kwargs: Any) -> argparse.ArgumentParser:
+        ...
+
+
+Builder = Callable[[SubParsers], argparse.ArgumentParser]
+Handler = Callable[[argparse.Namespace], int]
+
+
+class _Formatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """Shows every option's default; keeps descriptions as written."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """One-line errors (``slipenv run: error: ...``, status 2) and defaults in ``--help``."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+# -- argument types: each raises ArgumentTypeError with a one-line reason --------------------
+def env_id(text: str) -> str:
+    """A registered Gymnasium env id."""
+    if text in gym.registry:
+        return text
+    known = sorted(e for e in gym.registry if e.startswith("slipenv/"))
+    hint = difflib.get_close_matches(text, known, n=1, cutoff=0.8)
+    raise argparse.ArgumentTypeError(
+        f"unknown env id {text!r}" + (f"; did you mean {hint[0]!r}?" if hint else "")
+        + f" (registered: {', '.join(known)})")
+
+
+def _integer(text: str, low: int, what: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < low:
+        raise argparse.ArgumentTypeError(f"must be {what}, got {value}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    """An integer >= 1."""
+    return _integer(text, 1, ">= 1")
+
+
+def non_negative_int(text: str) -> int:
+    """An integer >= 0 (seeds)."""
+    return _integer(text, 0, ">= 0")
+
+
+def existing_dir(text: str) -> str:
+    """A log folder that exists."""
+    path = Path(text)
+    if not path.exists():
+        raise argparse.ArgumentTypeError(f"no such log folder: {text!r}")
+    if not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a folder")
+    return text
+
+
+def experiment_name(text: str) -> str:
+    """A known experiment of ``slipenv reproduce``."""
+    from slipenv.experiments import EXPERIMENT_MODULES
+
+    if text not in EXPERIMENT_MODULES:
+        raise argparse.ArgumentTypeError(f"unknown experiment {text!r}; known: "
+                                         f"{', '.join(sorted(EXPERIMENT_MODULES))}")
+    return text
+
+
+def writable_dir(path: str | Path, option: str) -> Path:
+    """Create ``path`` and prove it writable with a temporary file (``ValueError`` if not)."""
+    folder = Path(path)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise ValueError(f"{option} {str(path)!r}: cannot write there "
+                         f"({exc.strerror or exc})") from None
+    return folder
+
+
+def writable_file(path: str | Path | None, option: str) -> Path | None:
+    """Check that ``path`` (a file to write) can be written, before any work."""
+    if path is None:
+        return None
+    file = Path(path)
+    if file.is_dir():
+        raise ValueError(f"{option} {str(path)!r} is a folder, not a file")
+    writable_dir(file.parent if str(file.parent) else ".", option)
+    return file
+
+
+def _write_json(path: Path, data: dict) -> None:
+    path.write_text(json.dumps(data, indent=2) + "\n")
+
+
+def _fill(template: str, **fields: object) -> str:
+    """``template`` with ``{name}`` fields replaced (other braces are left as they are)."""
+    for name, value in fields.items():
+        template = template.replace("{" + name + "}", str(value))
+    return template
+
+
+def _short_name(env: str) -> str:
+    return env.split("/")[-1]
+
+
+# -- run -----------------------------------------------------------------------------------
+def add_run(sub: SubParsers) -> argparse.ArgumentParser:
+    from slipenv.controllers.baseline import BASELINE_NAMES
+
+    p = sub.add_parser("run", help="drive one episode with a baseline controller",
+                       description="Drive one episode with a baseline controller; print a "
+                                   "table judged on the true pose and write a trajectory plot.")
+    p.add_argument("env_id", type=env_id, help="e.g. slipenv/HuskySand-v0 (see `slipenv list`)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="reset seed")
+    p.add_argument("--controller", choices=BASELINE_NAMES, default="yamauchi",
+                   help="baseline controller")
+    p.add_argument("--max-steps", type=positive_int, default=None,
+                   help="stop after this many steps (None: the env's time limit)")
+    p.add_argument("--out", default="runs/{env}",
+                   help="output folder for the plot ({env} = the env's name)")
+    p.add_argument("--json", default=None, help="also write the metrics to this JSON file")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    return p
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from slipenv.run import format_table, plot_episode, run_episode, summarize
+    out_dir = writable_dir(_fill(args.out, env=_short_name(args.env_id)), "--out")
+    json_path = writable_file(args.json, "--json")
+    from slipenv.run import completion_text, format_table, plot_episode, run_episode, summarize
 
-    if args.env_id not in gym.registry:
-        print(f"unknown env id {args.env_id!r}; registered: {', '.join(_env_ids())}",
-              file=sys.stderr)
-        return 2
     rec = run_episode(args.env_id, seed=args.seed, controller=args.controller,
                       max_steps=args.max_steps, progress=not args.quiet)
     stats = summarize(rec)
-    print(format_table(stats, f"{args.env_id}  seed {args.seed}  controller {args.controller}"
-                              f"  ({rec.end_reason})"))
-    out_dir = args.out or f"runs/{args.env_id.split('/')[-1]}"
-    png = plot_episode(rec, f"{out_dir}/trajectory.png")
+    print(format_table(stats, f"{args.env_id}  seed {args.seed}  controller {args.controller}"))
+    print(completion_text(rec))
+    png = plot_episode(rec, out_dir / "trajectory.png")
     print(f"trajectory plot: {png}")
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump({"env_id": args.env_id, "seed": args.seed, "metrics": stats,
-                       "end_reason": rec.end_reason}, fh, indent=2)
-        print(f"metrics: {args.json}")
+    if json_path is not None:
+        _write_json(json_path, {"env_id": args.env_id, "seed": args.seed,
+                                "controller": args.controller, "metrics": stats,
+                                "success": rec.success, "end_reason": rec.end_reason})
+        print(f"metrics: {json_path}")
     return 0
+
+
+# -- bench ---------------------------------------------------------------------------------
+def add_bench(sub: SubParsers) -> argparse.ArgumentParser:
+    p = sub.add_parser("bench", help="env steps/s next to bare stepSimulation")
+    p.add_argument("env_ids", nargs="*", type=env_id, default=[],
+                   help="env ids to measure ([] = every registered slipenv id)")
+    p.add_argument("--json", default=None, help="write the figures to this JSON file")
+    p.add_argument("--steps", type=positive_int, default=200, help="env steps per measurement")
+    p.add_argument("--repeats", type=positive_int, default=5, help="interleaved repetitions")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    return p
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
+    json_path = writable_file(args.json, "--json")
     from slipenv.bench import format_bench, run_bench
 
-    ids = args.env_ids or _env_ids()
+    ids = args.env_ids or sorted(e for e in gym.registry if e.startswith("slipenv/"))
     result = run_bench(ids, steps=args.steps, repeats=args.repeats, progress=not args.quiet)
     print(format_bench(result))
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(result, fh, indent=2)
-        print(f"written: {args.json}")
+    if json_path is not None:
+        _write_json(json_path, result)
+        print(f"written: {json_path}")
     return 0
 
 
+# -- reproduce -----------------------------------------------------------------------------
+def add_reproduce(sub: SubParsers) -> argparse.ArgumentParser:
+    p = sub.add_parser("reproduce", help="re-run a source paper's experiment")
+    p.add_argument("name", type=experiment_name, help="lindgren | yamauchi")
+    p.add_argument("--quick", action="store_true", help="shorter runs, same experiments")
+    p.add_argument("--json", default=None, help="write metrics and paper values to this JSON")
+    p.add_argument("--out", default="runs/reproduce_{name}",
+                   help="folder for the plots ({name} = the experiment)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument("--save-model", default=None, metavar="PATH",
+                   help="yamauchi: also write the fitted slip model to PATH (maintainers: "
+                        "slipenv/data/yamauchi_slip_model.json of a source checkout)")
+    p.add_argument("--docs", default=None, metavar="DIR", help="write the page DIR/NAME.md")
+    return p
+
+
 def cmd_reproduce(args: argparse.Namespace) -> int:
+    out_dir = writable_dir(_fill(args.out, name=args.name), "--out")
+    json_path = writable_file(args.json, "--json")
+    docs_dir = None if args.docs is None else str(writable_dir(args.docs, "--docs"))
     from slipenv.experiments import experiment
 
     run = experiment(args.name)
-    extra = {"save_model": True} if getattr(args, "save_model", False) else {}
-    result = run(quick=args.quick, out_dir=args.out or f"runs/reproduce_{args.name}",
-                 json_path=args.json, seed=args.seed, progress=not args.quiet, **extra)
+    extra = {"save_model": args.save_model} if args.save_model else {}
+    result = run(quick=args.quick, out_dir=str(out_dir),
+                 json_path=None if json_path is None else str(json_path), seed=args.seed,
+                 progress=not args.quiet, docs_dir=docs_dir, **extra)
     return 0 if result is not None else 1
 
 
+# -- diagnose ------------------------------------------------------------------------------
+def add_diagnose(sub: SubParsers) -> argparse.ArgumentParser:
+    p = sub.add_parser("diagnose", help="diagnose a measured log (slipenv-log/1)")
+    p.add_argument("log_dir", type=existing_dir, help="folder with meta.json and signals.csv")
+    p.add_argument("--json", default=None, help="write the diagnosis report to this JSON file")
+    p.add_argument("--report", default=None,
+                   help="folder for the human report (plots + text; None: no report)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed of the fit")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    return p
+
+
 def cmd_diagnose(args: argparse.Namespace) -> int:
+    writable_file(args.json, "--json")
+    if args.report is not None:
+        writable_dir(args.report, "--report")
     from slipenv.diagnose.cli import main as diagnose_main
 
     return diagnose_main(args)
 
 
-def cmd_train(args: argparse.Namespace) -> int:
-    from slipenv.agents.train import evaluate, train
+# -- train ---------------------------------------------------------------------------------
+def add_train(sub: SubParsers) -> argparse.ArgumentParser:
+    p = sub.add_parser(
+        "train", help="train an SB3 agent (residual on the baseline by default)",
+        description="Train PPO, SAC or TD3 with the env's hyperparameters (rl-zoo3 YAML), "
+                    "then evaluate it next to the baseline on held-out seeds. OUT receives "
+                    "config.json, model.zip, checkpoints/ and logs/ (CSV + TensorBoard).")
+    p.add_argument("env_id", type=env_id, help="e.g. slipenv/HuskySand-v0")
+    p.add_argument("--algo", choices=("ppo", "sac", "td3"), default="ppo", help="algorithm")
+    p.add_argument("--timesteps", type=positive_int, default=None,
+                   help="total env steps (None: n_timesteps of the hyperparameter file)")
+    p.add_argument("--out", default="runs/train/{env}_{algo}_seed{seed}",
+                   help="run folder ({env}, {algo}, {seed} are filled in)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="training seed")
+    p.add_argument("--n-envs", type=positive_int, default=None,
+                   help="parallel envs, SubprocVecEnv when > 1 (None: the file's n_envs)")
+    p.add_argument("--residual", action=argparse.BooleanOptionalAction, default=None,
+                   help="learn a residual on the baseline path follower (None: as the "
+                        "file's env_wrapper says; the shipped files say yes)")
+    p.add_argument("--hyperparams", default=None,
+                   help="rl-zoo3 YAML file (None: the shipped agents/hyperparams/ALGO.yml)")
+    p.add_argument("--checkpoint-freq", type=non_negative_int, default=None,
+                   help="env steps between checkpoints (None: a quarter of the run; 0: none)")
+    p.add_argument("--episodes", type=positive_int, default=3,
+                   help="evaluation episodes (seeds 100, 101, ...)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar, no training table")
+    return p
 
-    model = train(args.env_id, algo=args.algo, total_timesteps=args.timesteps, seed=args.seed,
-                  residual=not args.no_residual, out=args.out, progress=not args.quiet)
-    agent = evaluate(model, args.env_id, n_episodes=args.episodes,
-                     residual=not args.no_residual)
-    baseline = evaluate("baseline", args.env_id, n_episodes=args.episodes)
-    print(f"{'policy':<10} {'return':>10} {'± std':>8} {'mean |cross-track| [m]':>24}")
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from slipenv.agents.train import evaluate, load_policy, resolve_config, train
+
+    config, _ = resolve_config(args.env_id, args.algo, args.timesteps, args.seed, args.n_envs,
+                               args.residual, args.hyperparams)  # a bad file fails here
+    out_dir = writable_dir(_fill(args.out, env=_short_name(args.env_id), algo=args.algo,
+                                 seed=args.seed), "--out")
+    print(f"training {config.algo} on {config.env_id}: {config.total_timesteps} steps, "
+          f"{config.n_envs} env(s), residual={config.residual}, seed {config.seed} -> {out_dir}")
+    formats = ("csv", "tensorboard") if args.quiet else ("stdout", "csv", "tensorboard")
+    train(args.env_id, algo=args.algo, total_timesteps=args.timesteps, seed=args.seed,
+          n_envs=args.n_envs, residual=args.residual, out=out_dir, progress=not args.quiet,
+          hyperparams=args.hyperparams, checkpoint_freq=args.checkpoint_freq,
+          log_formats=formats)
+    policy, _ = load_policy(out_dir)
+    agent = evaluate(policy, args.env_id, n_episodes=args.episodes, **config.env_kwargs)
+    baseline = evaluate("baseline", args.env_id, n_episodes=args.episodes, **config.env_kwargs)
+    print(f"evaluation on seeds {', '.join(map(str, agent.seeds))}:")
+    print(f"{'policy':<10} {'return':>10} {'± std':>8} {'mean |cross-track| [m]':>24} "
+          f"{'success':>8}")
     for name, r in (("baseline", baseline), (args.algo, agent)):
         print(f"{name:<10} {r.mean_return:>10.2f} {r.std_return:>8.2f} "
-              f"{r.mean_abs_cross_track_m:>24.3f}")
-    print(f"model: {args.out}.zip")
+              f"{r.mean_abs_cross_track_m:>24.3f} {r.success_rate:>8.0%}")
+    print(f"model: {out_dir / 'model.zip'}   logs: {out_dir / 'logs'} "
+          f"(tensorboard --logdir {out_dir / 'logs'})")
     return 0
+
+
+# -- list ----------------------------------------------------------------------------------
+def add_list(sub: SubParsers) -> argparse.ArgumentParser:
+    return sub.add_parser("list", help="registered env ids")
 
 
 def cmd_list(args: argparse.Namespace) -> int:
-    for env_id in _env_ids():
-        print(env_id)
+    for name in sorted(e for e in gym.registry if e.startswith("slipenv/")):
+        print(name)
     return 0
 
 
+SUBCOMMANDS: dict[str, tuple[Builder, Handler]] = {
+    "run": (add_run, cmd_run),
+    "bench": (add_bench, cmd_bench),
+    "reproduce": (add_reproduce, cmd_reproduce),
+    "diagnose": (add_diagnose, cmd_diagnose),
+    "train": (add_train, cmd_train),
+    "evaluate": (evaluate_cli.add_parser, evaluate_cli.main),
+    "sweep": (sweep_cli.add_parser, sweep_cli.main),
+    "list": (add_list, cmd_list),
+}
+"""name -> (function adding its sub-parser, handler returning the exit status). A new command
+is one entry: its builder calls ``sub.add_parser(name, help=...)`` (one-line errors and shown
+defaults come with it) and adds its arguments; its handler checks outputs, then works."""
+NEEDS_NO_PHYSICS = ("list",)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="slipenv", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="drive one episode with the baseline controller")
-    run.add_argument("env_id", help="e.g. slipenv/HuskySand-v0 (see `slipenv list`)")
-    run.add_argument("--seed", type=int, default=0)
-    run.add_argument("--controller", default="yamauchi",
-                     help="yamauchi (default), yamauchi_feedback, pure_pursuit, stanley")
-    run.add_argument("--max-steps", type=int, default=None)
-    run.add_argument("--out", default=None, help="output folder (default runs/<env>)")
-    run.add_argument("--json", default=None, help="also write the metrics as JSON")
-    run.add_argument("--quiet", action="store_true", help="no progress bar")
-    run.set_defaults(func=cmd_run)
-    bench = sub.add_parser("bench", help="env steps/s next to bare stepSimulation")
-    bench.add_argument("env_ids", nargs="*", help="default: every registered id")
-    bench.add_argument("--json", default=None, help="write the figures as JSON")
-    bench.add_argument("--steps", type=int, default=200, help="env steps per measurement")
-    bench.add_argument("--repeats", type=int, default=5, help="interleaved repetitions")
-    bench.add_argument("--quiet", action="store_true")
-    bench.set_defaults(func=cmd_bench)
-    rep = sub.add_parser("reproduce", help="re-run a source paper's experiment")
-    rep.add_argument("name", help="lindgren | yamauchi")
-    rep.add_argument("--quick", action="store_true", help="shorter runs, same experiments")
-    rep.add_argument("--json", default=None, help="write metrics and paper values as JSON")
-    rep.add_argument("--out", default=None, help="folder for plots (default runs/reproduce_NAME)")
-    rep.add_argument("--seed", type=int, default=0)
-    rep.add_argument("--quiet", action="store_true", help="no progress bars")
-    rep.add_argument("--save-model", action="store_true",
-                     help="yamauchi: also write the fitted slip model to slipenv/data (the "
-                          "default observation of slipenv/TrackedSlopeCircle-v0)")
-    rep.set_defaults(func=cmd_reproduce)
-    diag = sub.add_parser("diagnose", help="diagnose a measured log (slipenv-log/1)")
-    diag.add_argument("log_dir", help="folder with meta.json and signals.csv")
-    diag.add_argument("--json", default=None, help="write the diagnosis report (JSON)")
-    diag.add_argument("--report", default=None, help="folder for the human report (plots+text)")
-    diag.add_argument("--seed", type=int, default=0)
-    diag.add_argument("--quiet", action="store_true", help="no progress bars")
-    diag.set_defaults(func=cmd_diagnose)
-    tr = sub.add_parser("train", help="train an SB3 agent (residual on the baseline by default)")
-    tr.add_argument("env_id")
-    tr.add_argument("--algo", default="ppo", help="ppo | sac")
-    tr.add_argument("--timesteps", type=int, default=20_000)
-    tr.add_argument("--seed", type=int, default=0)
-    tr.add_argument("--episodes", type=int, default=3, help="evaluation episodes")
-    tr.add_argument("--no-residual", action="store_true", help="learn the whole action")
-    tr.add_argument("--out", default="runs/agents/model", help="model path (without .zip)")
-    tr.add_argument("--quiet", action="store_true")
-    tr.set_defaults(func=cmd_train)
-    sub.add_parser("list", help="registered env ids").set_defaults(func=cmd_list)
+    parser = _Parser(prog="slipenv", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"slipenv {slipenv.__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
+                                parser_class=_Parser)
+    for builder, handler in SUBCOMMANDS.values():
+        builder(sub).set_defaults(func=handler)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    """Entry point; returns the exit status (2: bad input, one line on stderr)."""
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exc:  # argparse: --help, --version, or a usage error already printed
+        return int(exc.code or 0)
+    if args.command not in NEEDS_NO_PHYSICS:
+        from slipenv.pybullet_quiet import import_pybullet
+
+        import_pybullet()  # first import of PyBullet in the process: no build-time banner
     try:
         return args.func(args)
     except ValueError as exc:
-        print(f"slipenv: error: {exc}", file=sys.stderr)
+        print(f"slipenv {args.command}: error: {exc}".splitlines()[0], file=sys.stderr)
         return 2
 
 

@@ -5,6 +5,18 @@ In the spirit of stable-baselines3's ``evaluate_policy``: a policy is anything w
 controller and every SB3 model), or a plain callable ``obs -> action``. What a caller needs to
 keep from the episode it says with *recorders*: objects whose ``on_reset`` and ``on_step`` are
 called with the env's own outputs, so the loop itself never grows a special case.
+
+Recorders shipped for reuse (each documents what it keeps):
+
+- :class:`TrajectoryRecorder` (here): per step the time, true and estimated pose, true
+  cross-track error, wheel slip, true body slip angle, action, reward and true / estimated
+  progress, as a :class:`Trajectory`;
+- ``slipenv.run.EpisodeRecorder``: the main job's ``EpisodeRecord`` (a trajectory plus plain
+  dead reckoning on the same sensor frames);
+- ``slipenv.logs.export.ExportRecorder``: the episode as a slipenv-log/1 log;
+- ``slipenv.bench.StepTimer``: wall time of the env steps (the benchmark).
+
+A recorder is reusable: ``on_reset`` starts a new episode.
 """
 
 from __future__ import annotations
@@ -15,6 +27,8 @@ from typing import Any, Protocol
 
 import gymnasium as gym
 import numpy as np
+
+from slipenv.contracts.observation import OBS_PROGRESS
 
 
 class PolicyPredictor(Protocol):
@@ -142,3 +156,121 @@ def rollout(env: gym.Env, policy: PolicyPredictor | Callable[[np.ndarray], Any],
                          end_reason=end_reason(info, terminated, truncated),
                          success=bool(info.get("is_success", False)),
                          terminated=bool(terminated), truncated=bool(truncated))
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """One episode's history, one row per env step (the reset is not a row).
+
+    Attributes
+    ----------
+    t_s : np.ndarray, shape (n,)
+        Simulation time at the end of each step [s].
+    true_pose, est_pose : np.ndarray, shape (n, 3)
+        True and estimated ``(x [m], y [m], yaw [rad])`` (``info["true_pose"]``,
+        ``info["estimated_pose"]``).
+    cross_track_true_m : np.ndarray, shape (n,)
+        True cross-track error [m], > 0 left of the path.
+    wheel_slip : np.ndarray, shape (n, n_wheels)
+        True longitudinal slip ratio of every wheel [-] (``info["wheel_slip"]``).
+    slip_angle_rad : np.ndarray, shape (n,)
+        True body slip angle β [rad].
+    actions : np.ndarray, shape (n, 2)
+        Actions sent to the env (``[v / v_max, ω / ω_max]``).
+    rewards : np.ndarray, shape (n,)
+    progress_true, progress_est : np.ndarray, shape (n,)
+        Fraction of the path done judged on the true pose and on the estimate [-].
+    wheel_names, wheel_channels, wheel_roles : tuple of str
+        Per column of ``wheel_slip``: name, drive channel (``""`` for none) and role.
+    skipped_steps : int
+        Steps without a truth in ``info`` (a physics blow-up), not recorded.
+    """
+
+    t_s: np.ndarray
+    true_pose: np.ndarray
+    est_pose: np.ndarray
+    cross_track_true_m: np.ndarray
+    wheel_slip: np.ndarray
+    slip_angle_rad: np.ndarray
+    actions: np.ndarray
+    rewards: np.ndarray
+    progress_true: np.ndarray
+    progress_est: np.ndarray
+    wheel_names: tuple[str, ...] = ()
+    wheel_channels: tuple[str, ...] = ()
+    wheel_roles: tuple[str, ...] = ()
+    skipped_steps: int = 0
+
+    def __len__(self) -> int:
+        return len(self.t_s)
+
+    def driven(self) -> np.ndarray:
+        """Column indices of the driven wheels in ``wheel_slip`` (all if roles are unknown)."""
+        if not self.wheel_roles:
+            return np.arange(self.wheel_slip.shape[1])
+        return np.array([k for k, r in enumerate(self.wheel_roles) if r == "driven"], dtype=int)
+
+
+_FIELDS = ("t", "true", "est", "ct", "slip", "beta", "act", "rew", "prog_true", "prog_est")
+
+
+class TrajectoryRecorder:
+    """Keeps a :class:`Trajectory` of the episode: truth, estimate, slip, actions, rewards.
+
+    Reads only the env's ``info`` (``t_s``, ``true_pose``, ``estimated_pose``,
+    ``cross_track_true_m``, ``wheel_slip``, ``true_slip_angle_rad``, ``progress_true``), the
+    observation's progress entry and the wheel list of ``env.unwrapped.vehicle``. Use
+    :meth:`trajectory` after the rollout.
+    """
+
+    def __init__(self) -> None:
+        self._rows: dict[str, list] = {k: [] for k in _FIELDS}
+        self._wheels: tuple[tuple[str, ...], ...] = ((), (), ())
+        self._skipped = 0
+
+    def on_reset(self, env: gym.Env, obs: np.ndarray, info: dict) -> None:
+        self._rows = {k: [] for k in _FIELDS}
+        self._skipped = 0
+        wheels = getattr(getattr(env.unwrapped, "vehicle", None), "wheels", ())
+        self._wheels = (tuple(w.name for w in wheels), tuple(w.channel or "" for w in wheels),
+                        tuple(w.role for w in wheels))
+
+    def on_step(self, env: gym.Env, action: np.ndarray, obs: np.ndarray, reward: float,
+                terminated: bool, truncated: bool, info: dict) -> None:
+        if "true_pose" not in info:  # a physics blow-up ends the episode without a truth
+            self._skipped += 1
+            return
+        rows = self._rows
+        rows["t"].append(float(info.get("t_s", np.nan)))
+        rows["true"].append(np.asarray(info["true_pose"], dtype=float))
+        rows["est"].append(np.asarray(info.get("estimated_pose", np.full(3, np.nan)),
+                                      dtype=float))
+        rows["ct"].append(float(info.get("cross_track_true_m", np.nan)))
+        rows["slip"].append(np.asarray(info.get("wheel_slip", ()), dtype=float))
+        rows["beta"].append(float(info.get("true_slip_angle_rad", np.nan)))
+        rows["act"].append(np.asarray(action, dtype=float).reshape(-1))
+        rows["rew"].append(float(reward))
+        rows["prog_true"].append(float(info.get("progress_true", np.nan)))
+        flat = np.asarray(obs).reshape(-1)
+        rows["prog_est"].append(float(flat[OBS_PROGRESS]) if flat.size > OBS_PROGRESS
+                                else np.nan)
+
+    def trajectory(self) -> Trajectory:
+        """The steps recorded since the last reset."""
+        rows = self._rows
+        n_wheels = len(self._wheels[0])
+
+        def stack(key: str, width: int) -> np.ndarray:
+            return np.array(rows[key], dtype=float).reshape(len(rows[key]), width)
+
+        slip = np.array(rows["slip"]) if rows["slip"] else np.zeros((0, n_wheels))
+        return Trajectory(
+            t_s=np.array(rows["t"]), true_pose=stack("true", 3), est_pose=stack("est", 3),
+            cross_track_true_m=np.array(rows["ct"]),
+            wheel_slip=slip,
+            slip_angle_rad=np.array(rows["beta"]), actions=stack("act", 2),
+            rewards=np.array(rows["rew"]), progress_true=np.array(rows["prog_true"]),
+            progress_est=np.array(rows["prog_est"]), wheel_names=self._wheels[0],
+            wheel_channels=self._wheels[1], wheel_roles=self._wheels[2],
+            skipped_steps=self._skipped,
+        )

@@ -2,8 +2,8 @@
 
 Layers, lowest first; a module may import its own layer's modules and lower layers only:
 
-    contracts <- terramechanics, paths <- vehicles, terrain <- sim <- sensors <- logs
-    <- envs, rollout <- {experiments, diagnose, agents, evaluation, run, bench} <- cli
+    contracts <- terramechanics, paths <- vehicles, terrain <- sim <- sensors <- logs, rollout
+    <- envs <- {experiments, diagnose, agents, evaluation, run, bench} <- cli
 
 Estimators import only the contracts; controllers only the contracts and the paths; nothing
 imports the command line; no module imports another module's ``_private`` name; no import
@@ -29,8 +29,8 @@ LAYERS: dict[str, int] = {
     "slipenv.vehicles": 2, "slipenv.terrain": 2,
     "slipenv.sim": 3,
     "slipenv.sensors": 4,
-    "slipenv.logs": 5,
-    "slipenv.envs": 6, "slipenv.rollout": 6,
+    "slipenv.logs": 5, "slipenv.rollout": 5,  # the loop needs only gymnasium and contracts
+    "slipenv.envs": 6,
     "slipenv.experiments": 7, "slipenv.diagnose": 7, "slipenv.agents": 7,
     "slipenv.evaluation": 7, "slipenv.run": 7, "slipenv.bench": 7,
     "slipenv.cli": 8,

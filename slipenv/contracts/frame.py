@@ -8,6 +8,7 @@ truth. Units are SI; frames follow ROS REP 103 (body x forward, y left, z up).
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
+from typing import ClassVar
 
 import numpy as np
 
@@ -66,4 +67,6 @@ class SensorFrame:
             for f in fields(self)
         )
 
-    __hash__ = None  # mutable arrays inside: not hashable
+    # Mutable arrays inside: not hashable. Defining __eq__ already sets __hash__ to None at run
+    # time; the annotation tells type checkers (typeshed spells unhashable types this way).
+    __hash__: ClassVar[None]  # type: ignore[assignment]

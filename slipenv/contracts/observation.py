@@ -102,6 +102,8 @@ def build_observation(x_m: float, y_m: float, yaw_rad: float, speed_mps: float,
     FloatingPointError
         If an entry is NaN or infinite (a diverged estimator must not reach a policy).
     """
+    if not math.isfinite(yaw_rad):  # math.cos would raise ValueError on ±inf
+        raise FloatingPointError(f"non-finite observation: yaw_rad = {yaw_rad!r}")
     total = projection.s + projection.remaining_m
     obs = (x_m, y_m, math.cos(yaw_rad), math.sin(yaw_rad), speed_mps, yaw_rate_rps,
            slip_angle_est_rad, projection.cross_track_m,

@@ -8,12 +8,15 @@ The workflow of DESIGN §5 (``slipenv diagnose LOG_DIR --json PATH --report DIR`
    declared slope). ``simreplay.py`` replays the same segments in PyBullet for the report.
 2. **Show** (``report.py``, ``plots.py``): trajectory overlay, residuals over time and against
    torque, yaw rate, roll, pitch, speed and position, NIS and whiteness of the segment ends.
-3. **Name the cause** (``effects.py``, ``fit.py``, ``select.py``): every effect of the
+3. **Name the cause** (``effects/``, ``fit.py``, ``select.py``): every effect of the
    vocabulary the data can test is fitted by nonlinear least squares (cluster-robust standard
    errors) in K-fold cross-validation, and compared with the nominal model on held-out
-   segments; an effect counts only if its gain is significant, large and material.
-4. **Extend** (``extension.py``): ``apply_model(config, report)`` carries the named effects
-   with their fitted parameters into the simulated world (``gymnasium.make(..., model=...)``).
+   segments; an effect counts only if its gain is significant, large and material. Each
+   effect is one module of ``effects/``: its parameters, replay term, fit, how it is applied
+   to the simulation and how the tests hide it; the generic code iterates over the registry.
+4. **Extend** (``extension.py``): ``apply_model(config, report)`` returns a new env config
+   with the named effects and their fitted parameters carried into the simulated world, for
+   ``gymnasium.make(env_id, config=...)``; ``make_env(env_id, report)`` does both.
 5. **Measure the gain**: held-out error before and after, in the JSON report.
 
 ``proprio.py`` covers logs without ground truth (yaw rate against wheel speeds); ``synth.py``
@@ -21,5 +24,10 @@ generates logs with a hidden effect from the physics, for the tests and
 ``benchmarks/diagnose_hit_rate.py``.
 
 Entry points: ``slipenv.diagnose.cli.diagnose(logs, where)``, ``cli.load_logs(path)``,
-``extension.apply_model(config, model)``, ``synth.generate(seed, effect, kind)``.
+``apply_model(config, report)``, ``make_env(env_id, report)``,
+``synth.generate(seed, effect, kind)``.
 """
+
+from slipenv.diagnose.extension import apply_model, make_env
+
+__all__ = ["apply_model", "make_env"]

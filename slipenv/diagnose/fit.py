@@ -7,18 +7,25 @@ radius shows as a growing drift), so the standard errors come from the cluster-r
 ("sandwich") covariance with one cluster per segment (Liang and Zeger 1986), scaled by
 G/(G - p) for G segments and p parameters; never smaller than the classical
 σ² (JᵀJ)⁻¹, which holds when the residuals are independent.
+
+What is fitted comes from each effect's module (``effects/``): its fields, their bounds and
+scales, and its data-driven starting guesses; this module never names an effect.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from slipenv.diagnose import replay
-from slipenv.diagnose.effects import Param, effect
-from slipenv.diagnose.replay import Segments
+from slipenv.diagnose.effects import Term, contract_report, effect
+from slipenv.diagnose.effects.base import Bound, StartContext
+from slipenv.diagnose.segments import Segments
+
+TRIAL_BUDGET = 8  # function evaluations per parameter of each short trial fit (several starts)
 
 
 @dataclass
@@ -50,22 +57,23 @@ class Problem:
             raise ValueError(f"effects {effects} mix the pose and gyro channels")
         return chans.pop()
 
-    def residuals(self, effects: tuple[str, ...], p: dict, seg: Segments | None = None
-                  ) -> np.ndarray:
-        """Residuals (S, L, k) of the channel of ``effects``: k = 3 (pose) or 1 (gyro)."""
+    def residuals(self, effects: tuple[str, ...], model: replay.Model,
+                  seg: Segments | None = None, channel: str | None = None) -> np.ndarray:
+        """Residuals (S, L, k) of the channel of ``effects`` (or ``channel``, for the nominal
+        model): k = 3 (pose) or 1 (gyro)."""
         seg = self.seg if seg is None else seg
-        if self.channel(effects) == "gyro":
-            yaw = replay.simulate_gyro_heading(seg, p)
+        if (channel or self.channel(effects)) == "gyro":
+            yaw = replay.simulate_gyro_heading(seg, model)
             return (self.heading_scale_m * replay.heading_residuals(seg, yaw))[..., None]
-        res = replay.pose_residuals(seg, replay.simulate(seg, p))
+        res = replay.pose_residuals(seg, replay.simulate(seg, model))
         res[..., 2] *= self.heading_scale_m
         return res
 
-    def segment_errors(self, effects: tuple[str, ...], p: dict,
-                       seg: Segments | None = None) -> np.ndarray:
+    def segment_errors(self, effects: tuple[str, ...], model: replay.Model,
+                       seg: Segments | None = None, channel: str | None = None) -> np.ndarray:
         """Mean squared residual of each segment (S,), over its ground-truth samples."""
         seg = self.seg if seg is None else seg
-        res = self.residuals(effects, p, seg)
+        res = self.residuals(effects, model, seg, channel)
         count = np.maximum(seg.gt_ok.sum(axis=1), 1)
         return (res**2).sum(axis=(1, 2)) / count
 
@@ -78,9 +86,9 @@ class Fit:
     ----------
     effects : tuple[str, ...]
     names : list[str]
-        Internal parameter names, in ``x`` order.
+        ``<effect>.<field>`` of each entry of ``x``.
     x : ndarray
-        Fitted internal values.
+        Fitted values (the effects' fields, in order).
     cov : ndarray
         Cluster-robust covariance of ``x``.
     rmse : float
@@ -97,36 +105,66 @@ class Fit:
     n_segments: int
 
     @property
-    def params(self) -> dict[str, float]:
-        return dict(zip(self.names, self.x.tolist(), strict=True))
+    def params(self) -> dict[str, Term]:
+        """The fitted model: ``{effect id: parameters}`` (what ``replay.simulate`` takes)."""
+        return unpack(self.effects, self.x)
 
     @property
-    def se(self) -> dict[str, float]:
-        return dict(zip(self.names, np.sqrt(np.maximum(np.diag(self.cov), 0.0)).tolist(),
-                        strict=True))
-
-    def report(self, seg: Segments) -> dict[str, list[float]]:
-        """``{contract name: [value, se]}`` over all effects (soil-patch stiffnesses prefixed
-        ``patch_`` when torque slip is fitted too)."""
-        out: dict[str, list[float]] = {}
-        for name in self.effects:
-            part = effect(name).to_contract(self.params, self.se, seg.wheels, seg.sides)
-            if name == "soil_patch" and "torque_slip" in self.effects:
-                part = {(f"patch_{k}" if k.startswith("k_s_") else k): v for k, v in part.items()}
-            out.update(part)
+    def se(self) -> dict[str, dict[str, float]]:
+        """Standard errors, ``{effect id: {field: se}}``, in the fields' units."""
+        errors = np.sqrt(np.maximum(np.diag(self.cov), 0.0)).tolist()
+        out: dict[str, dict[str, float]] = {name: {} for name in self.effects}
+        for key, e in zip(self.names, errors, strict=True):
+            name, _, field_name = key.partition(".")
+            out[name][field_name] = e
         return out
 
+    def report(self, seg: Segments) -> dict[str, list[float]]:
+        """``{contract name: [value, se]}`` over all effects (``effects.contract_report``)."""
+        return contract_report(self.params, self.se, seg.wheels, seg.sides)
 
-def param_specs(effects: tuple[str, ...], seg: Segments) -> list[Param]:
-    specs: list[Param] = []
+
+def unpack(effects: tuple[str, ...], x) -> dict[str, Term]:
+    """The fitted vector ``x`` as ``{effect id: parameters}``."""
+    out, k = {}, 0
     for name in effects:
-        specs += effect(name).params(seg)
-    return specs
+        eff = effect(name)
+        n = len(eff.fields())
+        out[name] = eff.from_vector(x[k:k + n])
+        k += n
+    return out
+
+
+def param_count(effects: tuple[str, ...]) -> int:
+    """Number of fitted parameters of ``effects``."""
+    return sum(len(effect(name).fields()) for name in effects)
+
+
+def layout(effects: tuple[str, ...], seg: Segments) -> list[tuple[str, Bound]]:
+    """``(<effect>.<field>, Bound)`` of every fitted parameter, in the vector's order."""
+    out = []
+    for name in effects:
+        eff = effect(name)
+        bounds = eff.bounds(seg)
+        if set(bounds) != set(eff.fields()):
+            raise ValueError(f"effect {name!r}: bounds for {sorted(bounds)}, parameters "
+                             f"{list(eff.fields())}")
+        out += [(f"{name}.{f}", bounds[f]) for f in eff.fields()]
+    return out
+
+
+def _flat(name: str, params: Term) -> dict[str, float]:
+    eff = effect(name)
+    return dict(zip((f"{name}.{f}" for f in eff.fields()), eff.to_vector(params), strict=True))
 
 
 def fit(problem: Problem, effects: tuple[str, ...], index: np.ndarray | None = None,
-        start: dict[str, float] | None = None, budget: int = 60) -> Fit:
+        start: Mapping[str, Term] | None = None, budget: int = 60) -> Fit:
     """Fit ``effects`` on the segments at ``index`` (all by default).
+
+    Starting values: ``start``'s, else each effect's data-driven guesses (``Effect.start``),
+    else its bounds' starts. When the guesses give several starting points, short trial fits
+    (``TRIAL_BUDGET``) pick the one the full fit is refined from.
 
     Parameters
     ----------
@@ -136,89 +174,58 @@ def fit(problem: Problem, effects: tuple[str, ...], index: np.ndarray | None = N
     index : ndarray of int, optional
         Training segments.
     start : dict, optional
-        Starting values overriding the effects' defaults (internal names).
+        ``{effect id: parameters}`` to start from (overrides the guesses of those effects).
     budget : int
         Function evaluations allowed per parameter.
     """
     seg = problem.seg if index is None else problem.seg.take(index)
-    specs = param_specs(effects, seg)
-    names = [s.name for s in specs]
+    specs = layout(effects, seg)
+    names = [n for n, _ in specs]
+    mask = seg.gt_ok
     if not specs:
-        res = problem.residuals(effects, {}, seg)[seg.gt_ok]
+        res = problem.residuals(effects, {}, seg)[mask]
         return Fit(effects, [], np.zeros(0), np.zeros((0, 0)),
                    float(np.sqrt(np.mean(res**2))), len(seg))
-    init = dict(start or {})
-    if "soil_patch" in effects and not {"px", "py", "pr"} <= init.keys():
-        init.update(patch_start(problem, seg, effects, init))
-    names_set = {sp.name for sp in specs}
-    if names_set & {"W", "r_L", "turn_k"}:
-        for key, value in linear_starts(seg).items():
-            if key in names_set and key not in init:
-                init[key] = value
-    if "turning_slip" in effects and "turn_k" not in init:
-        # the yaw loss is a track-width change to first order: κ0 = 1 - W/W_fit; Endo's
-        # exponent from a few starts (the split of the forward speed is not convex in n)
-        w_fit = linear_starts(seg)["W"]
-        init["turn_k"] = float(np.clip(1.0 - float(np.median(seg.track)) / w_fit, -0.8, 0.9))
-        best = None
-        for n0 in (0.3, 0.8, 1.5):  # short trial fits; the best one is refined
-            trial = fit(problem, effects, index, {**init, "endo_n": n0}, budget=8)
-            if best is None or trial.rmse < best.rmse:
-                best = trial
-        return fit(problem, effects, index, best.params, budget)
-    lo = np.array([s.lower for s in specs])
-    hi = np.array([s.upper for s in specs])
-    x0 = np.clip([init.get(s.name, s.start) for s in specs], lo + 1e-12 * np.abs(lo),
-                 hi - 1e-12 * np.abs(hi))
-    mask = seg.gt_ok
+    init: dict[str, float] = {}
+    for name, params in (start or {}).items():
+        init.update(_flat(name, params))
+    bound = dict(specs)
+    defaults = unpack(effects, [init.get(n, bound[n].start) for n in names])
+    ctx = StartContext(seg, defaults,
+                       lambda model: problem.residuals(effects, model, seg)[mask].ravel())
+    starts = [init]
+    for name in effects:
+        eff = effect(name)
+        if eff.start is None or all(f"{name}.{f}" in init for f in eff.fields()):
+            continue
+        guesses = [_flat(name, g) for g in eff.start(ctx)]
+        if guesses:
+            starts = [{**g, **s} for s in starts for g in guesses]
+    lo = np.array([b.lower for _, b in specs])
+    hi = np.array([b.upper for _, b in specs])
+    scale = np.array([b.scale for _, b in specs])
 
     def fun(x: np.ndarray) -> np.ndarray:
-        return problem.residuals(effects, dict(zip(names, x, strict=True)), seg)[mask].ravel()
+        return problem.residuals(effects, unpack(effects, x), seg)[mask].ravel()
 
-    sol = least_squares(fun, x0, bounds=(lo, hi), x_scale=np.array([s.scale for s in specs]),
-                        method="trf", xtol=1e-8, ftol=1e-8, max_nfev=budget * len(specs))
-    cov = _cluster_covariance(problem, effects, seg, names, sol.x, sol.jac)
+    def solve(values: dict[str, float], evals: int):
+        x0 = np.clip([values.get(n, bound[n].start) for n in names], lo + 1e-12 * np.abs(lo),
+                     hi - 1e-12 * np.abs(hi))
+        return least_squares(fun, x0, bounds=(lo, hi), x_scale=scale, method="trf",
+                             xtol=1e-8, ftol=1e-8, max_nfev=evals * len(specs))
+
+    if len(starts) > 1:
+        trials = [solve(s, TRIAL_BUDGET) for s in starts]
+        best = min(trials, key=lambda sol: float(np.mean(sol.fun**2)))
+        starts = [dict(zip(names, best.x.tolist(), strict=True))]
+    sol = solve(starts[0], budget)
+    cov = _cluster_covariance(problem, effects, seg, sol.x, sol.jac)
     return Fit(effects, names, sol.x, cov, float(np.sqrt(np.mean(sol.fun**2))), len(seg))
 
 
-def linear_starts(seg: Segments, window: int = 10) -> dict[str, float]:
-    """Closed-form starts for the track width and the side radii, from short windows.
-
-    Over windows of ``window`` samples with ground truth at both ends, the logged heading
-    change Δψ and along-track travel Δs are linear in 1/W and in (r_L, r_R):
-    Δψ W = r_R Δφ_R - r_L Δφ_L and Δs = (r_L Δφ_L + r_R Δφ_R)/2 (level-ground kinematics;
-    good enough to start from, and free of the local minima that wrapped headings give a
-    long segment whose nominal replay is far off).
-    """
-    rows = []
-    for j in range(len(seg)):
-        ok = np.flatnonzero(seg.gt_ok[j])
-        for a in ok[::window]:
-            b = a + window
-            if b >= seg.gt.shape[1] or not seg.gt_ok[j, b]:
-                continue
-            phi = seg.dphi[j, a:b].sum(axis=0)
-            dyaw = float(np.angle(np.exp(1j * (seg.gt[j, b, 2] - seg.gt[j, a, 2]))))
-            mid = seg.gt[j, a, 2] + 0.5 * dyaw
-            dx, dy = seg.gt[j, b, :2] - seg.gt[j, a, :2]
-            rows.append([phi[seg.sides == 0].mean(), phi[seg.sides == 1].mean(), dyaw,
-                         np.cos(mid) * dx + np.sin(mid) * dy])
-    r0, w0 = float(np.median(seg.radius)), float(np.median(seg.track))
-    if len(rows) < 5:
-        return {"W": w0, "r_L": r0, "r_R": r0}
-    phl, phr, dyaw, ds = np.array(rows).T
-    diff = r0 * (phr - phl)
-    inv_w = float(dyaw @ diff / max(diff @ diff, 1e-300))
-    w = float(np.clip(1.0 / inv_w, 0.25 * w0, 4.0 * w0)) if inv_w > 0 else w0
-    a = np.vstack([np.column_stack([0.5 * phl, 0.5 * phr]), np.column_stack([-phl, phr])])
-    r, *_ = np.linalg.lstsq(a, np.concatenate([ds, w * dyaw]), rcond=None)
-    r = np.clip(r, 0.6 * r0, 1.4 * r0)
-    return {"W": w, "r_L": float(r[0]), "r_R": float(r[1])}
-
-
-def _cluster_covariance(problem: Problem, effects, seg: Segments, names, x, jac) -> np.ndarray:
+def _cluster_covariance(problem: Problem, effects, seg: Segments, x, jac) -> np.ndarray:
     """Cluster-robust covariance (one cluster per segment), floored by the classical one."""
-    res = problem.residuals(effects, dict(zip(names, x, strict=True)), seg)
+    res = problem.residuals(effects, unpack(effects, x), seg)
     k = res.shape[-1]
     cluster = np.repeat(np.nonzero(seg.gt_ok)[0], k)
     r = res[seg.gt_ok].ravel()
@@ -235,40 +242,3 @@ def _cluster_covariance(problem: Problem, effects, seg: Segments, names, x, jac)
     ratio = np.diag(classical) / np.maximum(np.diag(robust), 1e-300)
     d = np.sqrt(np.maximum(ratio, 1.0))
     return robust * d[:, None] * d[None, :]
-
-
-def patch_start(problem: Problem, seg: Segments, effects: tuple[str, ...],
-                init: dict[str, float]) -> dict[str, float]:
-    """Best disc on a grid for the soil patch, with its compliances (linearised fit).
-
-    For each disc (8 × 8 centres over the ground-truth extent, 3 radii) the residuals are
-    linear in the two inside compliances to first order: one finite difference each and a
-    2 × 2 least squares give the disc's cost. The best disc starts the full fit.
-    """
-    from slipenv.diagnose.effects import patch_extent
-
-    x0, y0, x1, y1 = patch_extent(seg)
-    size = max(x1 - x0, y1 - y0, 1e-3)
-    base = {s.name: init.get(s.name, s.start) for s in param_specs(effects, seg)}
-    scale = effect("soil_patch").params(seg)[3].scale
-    mask = seg.gt_ok
-    best = (np.inf, {})
-    for radius in (0.1 * size, 0.2 * size, 0.35 * size):
-        for cx in np.linspace(x0, x1, 8):
-            for cy in np.linspace(y0, y1, 8):
-                p = {**base, "px": cx, "py": cy, "pr": radius, "pc_L": 0.0, "pc_R": 0.0}
-                w = replay.patch_weight(seg.pos, cx, cy, radius)
-                if w.max() < 0.5:
-                    continue
-                r0 = problem.residuals(effects, p, seg)[mask].ravel()
-                cols = []
-                for side in "LR":
-                    q = {**p, f"pc_{side}": scale}
-                    cols.append((problem.residuals(effects, q, seg)[mask].ravel() - r0) / scale)
-                jac = np.column_stack(cols)
-                step, *_ = np.linalg.lstsq(jac, -r0, rcond=None)
-                cost = float(np.sum((r0 + jac @ step) ** 2))
-                if cost < best[0]:
-                    best = (cost, {"px": cx, "py": cy, "pr": radius,
-                                   "pc_L": float(step[0]), "pc_R": float(step[1])})
-    return best[1]

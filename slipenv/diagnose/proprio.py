@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from slipenv.diagnose.replay import wheel_sides
+from slipenv.diagnose.segments import wheel_sides
 from slipenv.logs.log import Log
 
 BLOCK_S = 10.0  # [s] held-out block length

@@ -17,8 +17,9 @@ from typing import Any
 import numpy as np
 
 from slipenv.diagnose import geometry, replay
-from slipenv.diagnose.effects import EFFECTS, effect
+from slipenv.diagnose.effects import effect
 from slipenv.diagnose.fit import Problem
+from slipenv.diagnose.segments import Segments
 from slipenv.diagnose.select import ALPHA, MIN_DRIFT, MIN_GAIN, N_FOLDS, Selection
 from slipenv.estimators.consistency import consistency_report
 from slipenv.logs.log import Log
@@ -27,7 +28,7 @@ FORMAT = "slipenv-diagnosis/1"
 _WINDOW_S = 0.5  # [s] window of the per-window residuals plotted against regressors
 
 
-def _rmse(pred: np.ndarray, seg: replay.Segments, pos: bool) -> float:
+def _rmse(pred: np.ndarray, seg: Segments, pos: bool) -> float:
     if pos:
         err = (pred[..., :2] - seg.gt[..., :2])[seg.gt_ok]
         return float(np.sqrt(np.mean(np.sum(err**2, axis=-1))))
@@ -94,8 +95,10 @@ def build_report(sel: Selection, problem: Problem, logs: list[Log], where: str) 
     per_effect: dict[str, dict] = {}
     for fit in sel.fits.values():
         params.update(fit.report(seg))
+        values, errors = fit.params, fit.se
         for name in fit.effects:
-            per_effect[name] = effect(name).to_contract(fit.params, fit.se, seg.wheels, seg.sides)
+            per_effect[name] = effect(name).to_contract(values[name], errors[name], seg.wheels,
+                                                        seg.sides)
     chosen = [sel.cause, *sel.also] if sel.cause != "none" else []
     only_gyro = bool(chosen) and all(effect(e).channel == "gyro" for e in chosen)
     gain = dict(g["gyro_heading_rmse_rad"] if only_gyro else g["position_rmse_m"])
@@ -228,7 +231,7 @@ def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
                   "explains the log up to noise.", ""]
     else:
         also = f" (also: {', '.join(report['also'])})" if report["also"] else ""
-        lines += [f"**Cause: {cause}**{also} — {EFFECTS[cause].meaning}.", ""]
+        lines += [f"**Cause: {cause}**{also} — {effect(cause).meaning}.", ""]
         lines += ["| parameter | value | standard error |", "|---|---|---|"]
         lines += [f"| `{k}` | {v[0]:.6g} | {v[1]:.2g} |" for k, v in report["parameters"].items()]
         lines += [""]

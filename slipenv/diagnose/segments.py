@@ -1,7 +1,9 @@
 """Ground-truth-anchored segments of one or several logs, as padded arrays for the replay.
 
 Each segment starts on a sample with a full ground-truth pose; the replay (``replay.py``)
-integrates it from there. The segment length is chosen from the data (``choose_duration``).
+integrates it from there. This module only cuts and pads (:func:`log_arrays`, :func:`cut`);
+the segment length is chosen by replaying (``replay.choose_duration``), which is why
+``replay.build_segments`` is the entry point.
 """
 
 from __future__ import annotations
@@ -80,6 +82,14 @@ class Segments:
     def __len__(self) -> int:
         return len(self.t)
 
+    def anchor_heading(self) -> np.ndarray:
+        """In-plane heading at each segment start, from the logged yaw, shape (S,) [rad]."""
+        return geometry.heading_from_yaw(self.gt[:, 0, 2], self.tilt)
+
+    def geometric_roll(self, theta: np.ndarray) -> np.ndarray:
+        """Roll [rad] implied by the declared slope at in-plane heading θ (S, L-1) [rad]."""
+        return geometry.roll_from_heading(theta, self.tilt[:, None])
+
     def take(self, index: np.ndarray) -> Segments:
         """The segments at ``index`` (same padding)."""
         out = {}
@@ -87,33 +97,6 @@ class Segments:
             is_batch = isinstance(value, np.ndarray) and name != "sides"
             out[name] = value[index] if is_batch else value
         return Segments(**out)
-
-
-def choose_duration(arrays: list[dict], logs: list[Log]) -> float:
-    """Segment length [s]: the longest of ``DURATIONS_S`` that still gives ``MIN_SEGMENTS``
-    segments and keeps the nominal replay within ``MAX_END_HEADING_RAD`` of the logged heading
-    at a segment's end (median).
-
-    A weak effect shows as a drift that grows with the segment (a heading error makes the
-    position error grow quadratically) while the noise does not, so longer is better; but a
-    strong effect must not turn the nominal replay so far that the wrapped heading residual
-    gives the fit local minima, and the held-out comparison needs segments to compare.
-    """
-    from slipenv.diagnose.replay import simulate
-
-    best = DURATIONS_S[0]
-    for duration in DURATIONS_S:
-        pieces = _pieces(arrays, logs, duration)
-        if len(pieces) < MIN_SEGMENTS:
-            break
-        seg = _assemble(pieces, logs)
-        last = np.array([np.flatnonzero(row)[-1] for row in seg.gt_ok])
-        pred = simulate(seg, {})[np.arange(len(seg)), last, 2]
-        err = np.abs(geometry.wrap(pred - seg.gt[np.arange(len(seg)), last, 2]))
-        if float(np.median(err)) > MAX_END_HEADING_RAD:
-            break
-        best = duration
-    return best
 
 
 def check_logs(logs: list[Log]) -> None:
@@ -134,28 +117,14 @@ def check_logs(logs: list[Log]) -> None:
                              " the replay needs it to anchor and to compare")
 
 
-def build_segments(logs: list[Log], segment_s: float | None = None) -> Segments:
-    """Cut the logs into ground-truth-anchored segments and pad them into arrays.
+def cut(arrays: list[dict], logs: list[Log], seg_s: float) -> Segments | None:
+    """The logs cut into segments of ``seg_s`` [s] and padded; None when no segment fits.
 
-    Parameters
-    ----------
-    logs : list of Log
-    segment_s : float, optional
-        Segment length [s]; chosen from the data (``choose_duration``) when None.
-
-    Raises
-    ------
-    ValueError
-        If a log cannot be replayed (``check_logs``) or no segment fits.
+    ``arrays`` are the logs' :func:`log_arrays`; a segment needs ``MIN_SEGMENT_SAMPLES``
+    samples and ground truth at two of them at least.
     """
-    check_logs(logs)
-    arrays = [_log_arrays(log) for log in logs]
-    seg_s = segment_s or choose_duration(arrays, logs)
     pieces = _pieces(arrays, logs, seg_s)
-    if not pieces:
-        raise ValueError(f"no segment of {seg_s:.1f} s with ground truth at both ends fits in "
-                         "the log(s); the log is too short or its ground truth too sparse")
-    return _assemble(pieces, logs)
+    return _assemble(pieces, logs) if pieces else None
 
 
 def _pieces(arrays: list[dict], logs: list[Log], seg_s: float) -> list[tuple]:
@@ -212,7 +181,7 @@ def _assemble(pieces: list[tuple], logs: list[Log]) -> Segments:
     )
 
 
-def _log_arrays(log: Log) -> dict:
+def log_arrays(log: Log) -> dict:
     """Per-interval regressors of one log (see ``Segments``)."""
     t = log.t
     tilt = geometry.tilt_matrix(log.meta.slope_deg, log.meta.slope_downhill_azimuth_deg)

@@ -36,7 +36,8 @@ from tqdm import tqdm
 
 from slipenv.diagnose import replay
 from slipenv.diagnose.effects import EFFECTS, effect
-from slipenv.diagnose.fit import Fit, Problem, fit, param_specs
+from slipenv.diagnose.fit import Fit, Problem, fit, param_count
+from slipenv.diagnose.segments import Segments
 
 ALPHA = 0.01  # one-sided p-value an effect must beat
 MIN_GAIN = 0.2  # relative fall of the held-out mean squared error an effect must reach
@@ -44,7 +45,6 @@ MIN_DRIFT = 0.005  # [-] material drift: RMS fall × √3 / segment travel
 MIN_GYRO_DRIFT_RAD_S = 1e-3  # [rad/s] material gyro heading drift: RMS fall × √3 / duration
 TIE_RATIO = 1.25  # a simpler effect within this error ratio of the best and not worse wins
 N_FOLDS = 6
-_SAME_MECHANISM = {"torque_slip", "soil_patch"}  # never both: one torque-slip law
 MIN_SEGMENTS = 4
 
 
@@ -88,7 +88,7 @@ class Selection:
     folds: np.ndarray
 
 
-def make_folds(seg: replay.Segments) -> np.ndarray:
+def make_folds(seg: Segments) -> np.ndarray:
     """Fold of each segment: by log when there are several logs, else interleaved."""
     n = len(seg)
     if n < MIN_SEGMENTS:
@@ -105,19 +105,18 @@ def cross_validate(problem: Problem, effects: tuple[str, ...], folds: np.ndarray
     """Held-out errors and predictions of ``effects`` (refitted with each fold left out)."""
     seg = problem.seg
     chan = channel or problem.channel(effects)
-    cand = Candidate(effects, chan, len(param_specs(effects, seg)))
+    cand = Candidate(effects, chan, param_count(effects))
     errors = np.zeros(len(seg))
     pred = np.zeros(seg.gt.shape if chan == "pose" else seg.gt.shape[:2])
-    probe = effects or (("gyro_bias",) if chan == "gyro" else ())
     for k in np.unique(folds):
         test = np.flatnonzero(folds == k)
-        p: dict[str, float] = {}
+        p: replay.Model = {}
         if effects:
             f = fit(problem, effects, np.flatnonzero(folds != k))
             cand.fold_fits.append(f)
             p = f.params
         part = seg.take(test)
-        errors[test] = problem.segment_errors(probe, p, part)
+        errors[test] = problem.segment_errors(effects, p, part, chan)
         pred[test] = (replay.simulate(part, p) if chan == "pose"
                       else replay.simulate_gyro_heading(part, p))
     cand.errors, cand.pred = errors, pred
@@ -166,11 +165,17 @@ def _judge(problem: Problem, cand: Candidate, reference: np.ndarray) -> None:
                         and cand.material)
 
 
+def _same_mechanism(name: str, chosen: tuple[str, ...]) -> bool:
+    """True if ``name`` shares its mechanism with a chosen effect (never fitted together)."""
+    mechanism = effect(name).mechanism
+    return mechanism is not None and any(effect(c).mechanism == mechanism for c in chosen)
+
+
 def _pick(significant: list[Candidate]) -> Candidate:
     """Lowest held-out error, unless a simpler candidate is not significantly worse.
 
-    "Simpler": fewer parameters, then earlier in the vocabulary's order (geometry before
-    slip laws, the order of ``log-format.md``).
+    "Simpler": fewer parameters, then earlier in the vocabulary's order (``Effect.rank``:
+    geometry before slip laws, the order of ``log-format.md``).
     """
     best = min(significant, key=lambda c: c.errors.sum())
     order = list(EFFECTS)
@@ -206,7 +211,7 @@ def select(problem: Problem, progress: bool = False) -> Selection:
             continue
         current = _pick(sig)
         rest = [c.effects[0] for c in sig if c.effects[0] not in current.effects]
-        rest = [r for r in rest if not {r, *current.effects} >= _SAME_MECHANISM]
+        rest = [r for r in rest if not _same_mechanism(r, current.effects)]
         while rest:
             trials = []
             for name in rest:
@@ -219,7 +224,7 @@ def select(problem: Problem, progress: bool = False) -> Selection:
             current = min(trials, key=lambda c: c.errors.sum())
             _judge(problem, current, baseline[ch].errors)
             rest = [r for r in rest if r not in current.effects
-                    and not {r, *current.effects} >= _SAME_MECHANISM]
+                    and not _same_mechanism(r, current.effects)]
         final[ch] = current
     order = sorted(final.values(), key=lambda c: -c.gain_relative)
     chosen = [e for c in order for e in c.effects]

@@ -4,11 +4,11 @@ What it adds over the kinematic replay (``replay.py``): the vehicle's dynamics (
 limits, load transfer, the response lag after a command), the terrain's geometry and gravity
 on a slope, skid-steer scrub emerging from the force law, and soil maps — and it is the world
 the next training run will use, so replaying there checks that the extension carried into it
-(``apply_model``) reproduces the log. What it costs: a vehicle model the log does not give (mass,
-chassis, wheel layout are generic, built from the nominal meta), and about 1 ms per step. The
-diagnosis itself is fitted on the kinematic replay; PyBullet replays the first segments (about
-a minute) for the report's overlay, nominal world against the world extended by the model
-fitted *without* each segment's fold (held-out).
+(``extension.extend``) reproduces the log. What it costs: a vehicle model the log does not
+give (mass, chassis, wheel layout are generic, built from the nominal meta), and about 1 ms
+per step. The diagnosis itself is fitted on the kinematic replay; PyBullet replays the first
+segments (about a minute) for the report's overlay, nominal world against the world extended
+by the model fitted *without* each segment's fold (held-out).
 
 Skid-steer: a generic four-wheel vehicle on rigid ground turns less than its wheel spacing
 says; its side stiffness is tuned (bisection) until its effective track width is the log's
@@ -22,8 +22,9 @@ import math
 import numpy as np
 import pybullet as p
 
-from slipenv.diagnose.extension import ScaledSlip, apply_model
+from slipenv.diagnose.extension import extend
 from slipenv.diagnose.select import Selection
+from slipenv.diagnose.slip_law import ScaledSlip
 from slipenv.envs.config import SlipEnvConfig
 from slipenv.envs.factory import make_force_model, make_soil_map, make_vehicle
 from slipenv.logs.log import Log
@@ -196,11 +197,8 @@ def pybullet_overlay(log: Log, sel: Selection, problem, seed: int = 0,
                 out["extended"].append(out["nominal"][-1])
                 continue
             k = int(np.searchsorted(folds, sel.folds[j]))
-            if k not in sims:
-                fit = cand.fold_fits[k]
-                model = {"cause": fit.effects[0], "also": list(fit.effects[1:]),
-                         "nominal": nominal, "parameters": fit.report(seg)}
-                sims[k] = _simulator(apply_model(base, model), hz)
+            if k not in sims:  # the generic vehicle is built for the log: no vehicle check
+                sims[k] = _simulator(extend(base, cand.fold_fits[k].params, nominal), hz)
             out["extended"].append(replay_segment(sims[k], seg.t[j, :n], speeds, seg.gt[j, 0]))
     finally:
         for sim in sims.values():
@@ -212,5 +210,5 @@ def pybullet_overlay(log: Log, sel: Selection, problem, seed: int = 0,
         out[f"rmse_{name}_m"] = float(np.sqrt(np.nanmean(err**2)))
     out["note"] = ("Generic vehicle with the log's nominal geometry on rigid ground (mass and "
                    "chassis assumed); extended world = nominal world + the model fitted "
-                   "without each segment's fold, carried in by apply_model.")
+                   "without each segment's fold, carried in by extension.extend.")
     return out

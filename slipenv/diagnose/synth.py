@@ -4,24 +4,9 @@
 symmetric four-wheel :func:`skid4` for ``skid_steer``) between random waypoints on rigid,
 level or sloped ground, and exports the run as a slipenv-log/1 log whose ``meta.json`` holds
 the *nominal* model. One effect of random size is hidden in the *physics* of the world (never
-in the kinematic model the diagnosis fits), or none:
-
-=============== ==== =========================================================================
-effect          kind what changes in the simulated world
-=============== ==== =========================================================================
-rolling_radius  both each wheel's effective rolling radius 1-4 % off (``apply_model``)
-track_width     diff wheels moved apart or together by 5-15 % (``apply_model``)
-track_width     skid side stiffness ×1.5-3 or ÷1.5-3: the turning resistance that sets a
-                     skid-steer's effective width (its wheel spacing barely does)
-torque_slip     diff longitudinal slip stiffness set to k_s, 2-6 % slip at the typical torque
-turning_slip    skid softer ground: longitudinal stiffness 3-10 % of the rigid ground's, the
-                     tracks slip in turns (no torque column: with one it is torque slip)
-slope_side_slip skid an 8-15° side slope with soft side stiffness (×0.15-0.4); the nominal
-                     width is calibrated on level ground of the same soil
-soil_patch      diff a disc of softer soil (radius 35-50 % of the arena's half-size, on the
-                     route's focus), 2-5 % slip inside at the typical torque (``apply_model``)
-gyro_bias       both a yaw-gyro offset of 0.005-0.03 rad/s (``apply_model``)
-=============== ==== =========================================================================
+in the kinematic model the diagnosis fits), or none. How each effect is hidden — on which
+vehicle kinds, what changes in the world, which columns the log needs — is in its module
+(``effects/<effect>.py``, its ``Hiding``); this module is generic over them.
 
 Why some effects are hidden on one kind only: on a skid-steer vehicle a softer longitudinal
 law shows mainly in turns (the scrub torque dominates and the slip follows the combined law),
@@ -30,7 +15,7 @@ differential-drive vehicle with castors on a soft side slope yaws downhill (the 
 no side force), which is not Yamauchi's side slip, so slopes with side slip are skid-steer
 only. ``combined_slip`` is not generated: on these vehicles a slip angle comes only with side
 slip, so it never appears alone. About 30 % of the differential-drive logs stand on a 5-12°
-slope whatever the effect.
+slope, except where the effect's ``Hiding`` says otherwise.
 
 A skid-steer vehicle never turns as its wheel spacing says (the wheels scrub), so its nominal
 track width is the *effective* one, fitted on a long run of the clean world — as an operator
@@ -49,8 +34,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from slipenv.diagnose.extension import apply_model
+from slipenv.diagnose.effects import EFFECTS, effect
+from slipenv.diagnose.effects.base import DrawContext
+from slipenv.diagnose.extension import extend
+from slipenv.diagnose.segments import wheel_sides
 from slipenv.diagnose.simreplay import rigid_ground
+from slipenv.diagnose.slip_law import scaled
 from slipenv.envs.config import SlipEnvConfig
 from slipenv.envs.factory import make_force_model, make_soil_map, make_vehicle
 from slipenv.logs.export import LogRecorder, meta_for
@@ -87,17 +76,16 @@ def skid4() -> VehicleSpec:
         counts_per_rad=285.0)
 
 
-GENERATED = ("none", "rolling_radius", "track_width", "torque_slip", "turning_slip",
-             "slope_side_slip", "soil_patch", "gyro_bias")
 VEHICLES = {"diff_drive": farm_2wd, "skid_steer": skid4}
-KINDS = {e: ("diff_drive", "skid_steer") for e in GENERATED}
-KINDS.update(torque_slip=("diff_drive",), soil_patch=("diff_drive",),
-             turning_slip=("skid_steer",), slope_side_slip=("skid_steer",))
-"""Vehicle kinds each effect is hidden on (see the module notes)."""
+GENERATED = ("none", *(name for name, e in EFFECTS.items() if e.hiding is not None))
+KINDS = {"none": tuple(VEHICLES)} | {
+    name: EFFECTS[name].hiding.kinds for name in GENERATED[1:]}
+"""Vehicle kinds each effect is hidden on (its module's ``Hiding.kinds``)."""
 ARENA_M = {"diff_drive": 5.0, "skid_steer": 3.5}  # half-size of the waypoint box [m]
 MAX_TURN_RATIO = {"diff_drive": 0.8, "skid_steer": 0.35}  # |v_r - v_l| / |v_r + v_l| limit
 CALIBRATION_S = 150.0  # [s] length of the noise-free calibration runs
-EXACT = {"diff_drive": ("gyro_bias",), "skid_steer": ("gyro_bias",)}
+EXACT = {kind: tuple(name for name in GENERATED[1:] if EFFECTS[name].hiding.exact
+                    and kind in KINDS[name]) for kind in VEHICLES}
 """Effects whose true parameters the physics takes one to one (a sensor offset). For all
 others the vehicle's own dynamics shift the effective value a little (the farm vehicle's
 castors let it oversteer, tread compliance adds slip), so their true values are those fitted
@@ -126,10 +114,6 @@ class SynthLog:
     world: dict = field(default_factory=dict)
 
 
-def _draw_size(rng: np.random.Generator, lo: float, hi: float) -> float:
-    return float(rng.uniform(lo, hi) * rng.choice([-1.0, 1.0]))
-
-
 def base_config(kind: str, slope_deg: float = 0.0, azimuth_deg: float = 0.0,
                 noise: SensorNoise | None = None) -> SlipEnvConfig:
     """The clean world of ``kind``: the vehicle on rigid ground, optional planar slope.
@@ -143,63 +127,41 @@ def base_config(kind: str, slope_deg: float = 0.0, azimuth_deg: float = 0.0,
                          force_model=rigid_ground(kind), sensor_noise=noise or SensorNoise())
 
 
-def hidden_world(kind: str, effect: str, rng: np.random.Generator,
+def hidden_world(kind: str, name: str, rng: np.random.Generator,
                  focus: tuple[float, float]) -> tuple[SlipEnvConfig, dict, dict]:
-    """The world with ``effect`` hidden: (config, model applied, settings).
+    """The world with effect ``name`` hidden: (config, model applied, settings).
 
-    A skid-steer vehicle that turns on a side slope scrubs sideways and slides downhill, so
-    it stands on a slope only when slope side slip is the hidden effect; a differential-drive
-    vehicle stands on a 5-12° slope in 30 % of the logs whatever the effect.
+    The effect's ``Hiding`` draws it: parameters applied to the world as a diagnosed model
+    would be (``extension.extend``; the model is returned in the contract's names), or
+    settings of the force law the effect emerges from. A skid-steer vehicle that turns on a
+    side slope scrubs sideways and slides downhill, so it stands on a slope only when its
+    effect asks for one; a differential-drive vehicle stands on a 5-12° slope in 30 % of the
+    logs unless the effect forbids it.
     """
+    hiding = effect(name).hiding if name != "none" else None
     slope = 0.0
-    if effect == "slope_side_slip":
-        slope = float(rng.uniform(8.0, 15.0))
-    elif kind == "diff_drive" and effect != "soil_patch" and rng.random() < 0.3:
+    if hiding is not None and hiding.slope_deg is not None:
+        slope = float(rng.uniform(*hiding.slope_deg))
+    elif (kind == "diff_drive" and (hiding is None or hiding.random_slope)
+          and rng.random() < 0.3):
         slope = float(rng.uniform(5.0, 12.0))
     azimuth = float(rng.uniform(-180.0, 180.0))
     cfg = base_config(kind, slope, azimuth)
-    spec = make_vehicle(cfg.vehicle)
-    wheels = list(spec.channels)
     world = {"slope_deg": slope, "azimuth_deg": azimuth}
-    model: dict = {}
-    if effect == "rolling_radius":
-        r = spec.wheel_radius_nominal_m
-        model = {effect: {f"radius_{w}_m": r * (1 + _draw_size(rng, 0.01, 0.04)) for w in wheels}}
-    elif effect == "track_width" and kind == "skid_steer":
-        # a skid-steer's effective width is its turning resistance, not its wheel spacing
-        scale = float(np.exp(_draw_size(rng, np.log(1.5), np.log(3.0))))
-        world["lat_scale"] = scale
-        return dataclasses.replace(cfg, force_model=_scaled(cfg, lat_scale=scale)), {}, world
-    elif effect == "track_width":
-        w0 = spec.track_width_m
-        model = {effect: {"track_width_m": w0 * (1 + _draw_size(rng, 0.05, 0.15))}}
-    elif effect in ("torque_slip", "soil_patch"):
-        slip = rng.uniform(0.02, 0.06) if effect == "torque_slip" else rng.uniform(0.02, 0.05)
-        k_s = typical_torque_nm(kind) / float(slip)
-        model = {effect: {f"k_s_{w}_nm": k_s for w in wheels}}
-        if effect == "soil_patch":
-            radius = float(rng.uniform(0.35, 0.5)) * ARENA_M[kind]
-            model[effect].update(patch_center_x_m=focus[0], patch_center_y_m=focus[1],
-                                 patch_radius_m=radius)
-    elif effect == "turning_slip":
-        scale = float(rng.uniform(0.03, 0.1))  # of the rigid ground: 0.15-0.5 of concrete
-        world["long_scale"] = scale
-        return dataclasses.replace(cfg, force_model=_scaled(cfg, long_scale=scale)), {}, world
-    elif effect == "slope_side_slip":
-        # soft ground that gives little side force: on the slope the vehicle slides downhill
-        scale = float(rng.uniform(0.15, 0.4))
-        world["lat_scale"] = scale
-        return dataclasses.replace(cfg, force_model=_scaled(cfg, lat_scale=scale)), {}, world
-    elif effect == "gyro_bias":
-        model = {effect: {"gyro_bias_rad_s": _draw_size(rng, 0.005, 0.03)}}
-    cfg = apply_model(cfg, model) if model else cfg
-    return cfg, model, world
-
-
-def _scaled(cfg: SlipEnvConfig, **options: float):
-    from slipenv.diagnose.extension import ScaledSlip
-
-    return ScaledSlip(cfg.force_model, tuple(sorted(options.items())))
+    if hiding is None:
+        return cfg, {}, world
+    spec = make_vehicle(cfg.vehicle)
+    ctx = DrawContext(kind, spec, ARENA_M[kind], focus, lambda: typical_torque_nm(kind))
+    hidden = hiding.draw(rng, ctx)
+    if hidden.slip_options:
+        world.update(hidden.slip_options)
+        return dataclasses.replace(cfg, force_model=scaled(cfg.force_model,
+                                                           **hidden.slip_options)), {}, world
+    wheels = list(spec.channels)
+    params = effect(name).to_contract(hidden.params, dict.fromkeys(effect(name).fields(), 0.0),
+                                      wheels, wheel_sides(wheels))
+    model = {name: {k: v[0] for k, v in params.items()}}
+    return extend(cfg, {name: hidden.params}), model, world
 
 
 @functools.lru_cache(maxsize=4)
@@ -339,12 +301,12 @@ def generate(seed: int, effect: str | None = None, kind: str | None = None,
     cfg, model, world = hidden_world(kind, effect, rng, focus)
     if columns is None:
         columns = {g for g in ("cmd", "torque", "imu", "attitude", "heading") if rng.random() < 0.6}
-    columns = set(columns) | {"torque_slip": {"torque"}, "soil_patch": {"torque"},
-                              "gyro_bias": {"imu"}}.get(effect, set())
-    if effect == "turning_slip":
-        columns.discard("torque")
+    hiding = EFFECTS[effect].hiding if effect != "none" else None
+    columns = set(columns)
+    if hiding is not None:  # what the effect needs (torque, IMU) or must not have
+        columns = (columns | hiding.columns) - hiding.drop_columns
     meta_w = effective_track_m(kind)
-    if effect == "slope_side_slip":  # the operator calibrated the width on level ground
+    if hiding is not None and hiding.level_width:  # the operator calibrated it on level ground
         level = dataclasses.replace(cfg, terrain=TerrainSpec())
         meta_w = calibrate(level, kind, ("track_width",))["track_width_m"][0]
     run = drive(cfg, kind, rng, duration_s, focus, columns, meta_track_m=meta_w)

@@ -26,11 +26,11 @@ import numpy as np
 
 from slipenv.estimators.base import Estimator, OdometryGeometry
 from slipenv.estimators.dead_reckoning import DeadReckoning
-from slipenv.estimators.endo import EndoOdometry
+from slipenv.estimators.skid_steer.endo import EndoOdometry
 from slipenv.estimators.gyrodometry import Gyrodometry
-from slipenv.estimators.lindgren_ekf import LindgrenEKF
-from slipenv.estimators.lindgren_models import OracleSoil
-from slipenv.estimators.lindgren_params import LindgrenNoise
+from slipenv.estimators.lindgren.ekf import LindgrenEKF
+from slipenv.estimators.lindgren.models import OracleSoil
+from slipenv.estimators.lindgren.params import LindgrenNoise
 from slipenv.vehicles.spec import VehicleSpec
 
 ENDO_N_HARD_FLOOR = 0.824  # Yamauchi Table 1
@@ -62,8 +62,8 @@ def _endo(spec: VehicleSpec, context: dict, n: float = ENDO_N_HARD_FLOOR, **kw: 
 
 def _slip_compensated(spec: VehicleSpec, context: dict, beta_model: Any = None,
                       n: float = ENDO_N_HARD_FLOOR, **kw: Any) -> Estimator:
-    from slipenv.estimators.identification import SlipAngleModel
-    from slipenv.estimators.yamauchi import SlipCompensatedOdometry
+    from slipenv.estimators.skid_steer.identification import SlipAngleModel
+    from slipenv.estimators.skid_steer.yamauchi import SlipCompensatedOdometry
 
     if beta_model is None:
         raise ValueError(
@@ -147,7 +147,7 @@ def true_soil_for_oracle(sim, torque_scale: float = 1.0) -> OracleSoil:
         k = ks[0]
         load = np.array([max(float(inj.load[k]), 1.0)])
         eps = 1e-4
-        fx, _ = inj.force_model(np.array([eps]), np.zeros(1), load, inj._soil_rows[k])
-        radii.append(float(inj._r_eff[k]))
+        fx, _ = inj.force_model(np.array([eps]), np.zeros(1), load, inj.soil_at_wheel(k))
+        radii.append(inj.rolling_radius_m(k))
         k_s.append(len(ks) * torque_scale * sim.spec.wheels[k].radius_m * float(fx[0]) / eps)
     return OracleSoil(wheel_radius_m=tuple(radii), k_s=tuple(k_s))

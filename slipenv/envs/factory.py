@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+import difflib
+import inspect
 from typing import Any
 
+import numpy as np
+
+from slipenv.paths import Path, path_by_name
 from slipenv.terramechanics.models import ContactGeometry, force_model_by_name
 from slipenv.terramechanics.presets import soil_by_name
 from slipenv.terramechanics.soil import Soil
@@ -56,3 +61,64 @@ def make_force_model(force_model: Any, spec: VehicleSpec):
             raise ValueError("a force_model factory must return a ForceModel (with resistance_n)")
         return model
     raise ValueError(f"force_model must be a name, a ForceModel or a factory, got {force_model!r}")
+
+
+def make_path(name: str, kwargs: dict) -> Path:
+    """The named path built with ``kwargs``; any failure is a ``ValueError`` naming
+    ``path_kwargs`` (the builders name the bad argument)."""
+    try:
+        return path_by_name(name, **kwargs)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ValueError(f"bad path_kwargs for path {name!r}: {exc}") from None
+
+
+def check_estimator_name(name: str) -> None:
+    """``name`` must be a registered estimator (else a "did you mean" ``ValueError``)."""
+    from slipenv.envs.estimation import ESTIMATORS
+
+    if name not in ESTIMATORS:
+        close = difflib.get_close_matches(name, sorted(ESTIMATORS), n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        raise ValueError(f"unknown estimator {name!r}{hint} Known estimators: "
+                         f"{sorted(ESTIMATORS)}")
+
+
+def build_estimator(name: str, kwargs: dict, spec: VehicleSpec, context: dict):
+    """Build estimator ``name`` with ``kwargs``; any failure (unknown option, bad value) is a
+    ``ValueError`` naming ``estimator_kwargs``, with a suggestion for a misspelt option."""
+    from slipenv.envs.estimation import ESTIMATORS, make_estimator
+
+    try:
+        return make_estimator(name, spec, context, **kwargs)
+    except (TypeError, ValueError, KeyError, OverflowError, AttributeError) as exc:
+        # An AttributeError here is an option of the wrong type (e.g. ``params=1`` where the
+        # EKF expects LindgrenNoise or a dict) reaching the estimator's constructor.
+        known = [p for p in inspect.signature(ESTIMATORS[name]).parameters][2:]
+        known = [k for k in known if k not in ("kw", "kwargs")]
+        hints = []
+        for key in kwargs:
+            if key not in known and key in str(exc):
+                close = difflib.get_close_matches(key, known, n=1)
+                if close:
+                    hints.append(f"did you mean {close[0]!r} for {key!r}?")
+        hint = (" " + " ".join(hints)) if hints else ""
+        raise ValueError(f"bad estimator_kwargs {kwargs!r} for estimator {name!r}: "
+                         f"{exc}{hint}") from None
+
+
+def check_action(action: Any) -> np.ndarray:
+    """The action as a float64 array of shape (2,); anything else is a ``ValueError``.
+
+    Accepted: real numbers (bool, integer or float dtypes), finite, two of them. Complex,
+    string and object actions are refused rather than cast (a complex number would lose its
+    imaginary part silently, a string would be parsed).
+    """
+    raw = np.asarray(action) if not isinstance(action, np.ndarray) else action
+    if raw.dtype.kind not in "biuf":
+        raise ValueError(f"action must hold real numbers, got dtype {raw.dtype} ({action!r})")
+    out = raw.astype(np.float64).reshape(-1)
+    if out.shape != (2,):
+        raise ValueError(f"action must have shape (2,), got {np.shape(raw)}")
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f"action contains NaN or inf: {out.tolist()}")
+    return out

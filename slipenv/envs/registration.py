@@ -13,7 +13,8 @@ id                                     task
 ``slipenv/RoverMounds-v0``             Reina's 4WS rover crossing lunar-simulant sand with
                                        mounds (slalom at 8 cm/s)
 ``slipenv/HuskySand-v0``               pybullet_data's Husky on loose sand, s-curve
-``slipenv/Configurable-v0``            everything a kwarg (defaults: Husky, circle, sand)
+``slipenv/Configurable-v0``            everything a kwarg (defaults: Husky on loose sand,
+                                       Janosi force law, 3 m circle, gyrodometry)
 =====================================  =====================================================
 """
 
@@ -22,31 +23,47 @@ from __future__ import annotations
 import difflib
 import json
 import math
-import warnings
 from importlib import resources
+from importlib.resources.abc import Traversable
 
 import gymnasium as gym
 
 from slipenv.envs.config import SlipEnvConfig
 
 ENTRY_POINT = "slipenv.envs.slip_env:SlipEnv"
-# Fitted by ``slipenv reproduce yamauchi --save-model``; shipped in slipenv/data.
+# Fitted by ``slipenv reproduce yamauchi --save-model PATH``; version-controlled package data.
 YAMAUCHI_MODEL = "yamauchi_slip_model.json"
+
+
+def yamauchi_model_file() -> Traversable:
+    """The shipped slip model of the tracked env, ``slipenv/data/yamauchi_slip_model.json``,
+    as an :mod:`importlib.resources` path (read-only: the package never writes it)."""
+    return resources.files("slipenv").joinpath("data", YAMAUCHI_MODEL)
 
 
 def yamauchi_observation() -> dict:
     """Estimator options of the tracked env: Yamauchi's slip-compensated odometry with the
     shipped fitted model (Eq. 9 coefficients and Endo's n), so the observation carries β̂.
 
-    Falls back to Endo's odometry (β̂ = 0), with a warning, if the model file is missing.
+    Raises
+    ------
+    FileNotFoundError
+        If the model file is missing: a packaging bug (``pyproject.toml`` package-data), not
+        something to paper over with a different observation.
+    ValueError
+        If the file lacks ``beta_model`` or ``n`` (the message names the file and the key).
     """
-    try:
-        saved = json.loads(resources.files("slipenv").joinpath("data", YAMAUCHI_MODEL)
-                           .read_text())
-    except FileNotFoundError:
-        warnings.warn(f"slipenv/data/{YAMAUCHI_MODEL} is missing; TrackedSlopeCircle-v0 "
-                      "observes Endo odometry without slip angle", RuntimeWarning, stacklevel=2)
-        return {"estimator": "endo", "estimator_kwargs": {}}
+    model = yamauchi_model_file()
+    if not model.is_file():
+        raise FileNotFoundError(
+            f"slipenv/data/{YAMAUCHI_MODEL} is missing from the installed package ({model}); "
+            "it is package data (pyproject.toml [tool.setuptools.package-data]): reinstall "
+            "slipenv, or regenerate it in a source checkout with `slipenv reproduce yamauchi "
+            f"--save-model slipenv/data/{YAMAUCHI_MODEL}`")
+    saved = json.loads(model.read_text())
+    for key in ("beta_model", "n"):
+        if key not in saved:
+            raise ValueError(f"slipenv/data/{YAMAUCHI_MODEL} has no {key!r} entry")
     return {"estimator": "slip_compensated",
             "estimator_kwargs": {"beta_model": saved["beta_model"], "n": saved["n"]}}
 
@@ -80,7 +97,8 @@ PRESETS: dict[str, dict] = {
         max_episode_s=40.0,
     ),
     "slipenv/Configurable-v0": dict(
-        path="circle", path_kwargs={"radius_m": 3.0, "speed_mps": 0.5}, max_episode_s=60.0,
+        force_model="janosi", estimator="gyrodometry", path="circle",
+        path_kwargs={"radius_m": 3.0, "speed_mps": 0.5}, max_episode_s=60.0,
     ),
 }
 

@@ -8,22 +8,38 @@ Reward and termination use ground truth; ground truth goes in ``info``.
 from __future__ import annotations
 
 import math
+import os
+import sys
+import weakref
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
-import pybullet as p
 from gymnasium import spaces
 
 from slipenv.contracts import OBS_HIGH, OBS_LOW, PoseEstimate, build_observation, wrap_angle
 from slipenv.envs.config import SlipEnvConfig
-from slipenv.envs.estimation import make_estimator
-from slipenv.envs.factory import make_force_model, make_soil_map, make_vehicle
-from slipenv.paths import Path, path_by_name
+from slipenv.envs.factory import (
+    build_estimator,
+    check_action,
+    check_estimator_name,
+    make_force_model,
+    make_path,
+    make_soil_map,
+    make_vehicle,
+)
+from slipenv.envs.render import render_map
+from slipenv.paths import Path, sample_path
 from slipenv.sensors.onboard import SensorSuite
 from slipenv.sim.simulator import PhysicsBlowUp, Simulator, VehicleTruth
 from slipenv.vehicles.kinematics import twist_to_commands
 from slipenv.vehicles.spec import VehicleSpec
+
+
+def render_modes() -> list[str]:
+    """``["rgb_array"]``, plus ``"human"`` where a display is available (the GUI needs one)."""
+    headless = sys.platform.startswith("linux") and not os.environ.get("DISPLAY")
+    return ["rgb_array"] if headless else ["human", "rgb_array"]
 
 
 class SlipEnv(gym.Env):
@@ -63,6 +79,11 @@ class SlipEnv(gym.Env):
     ``heading`` = -e_ψ^2, ``progress`` = path length gained / (reference speed · dt),
     ``effort`` = -|Δaction|^2.
 
+    Randomness: every draw comes from the env's generator, seeded by ``reset(seed)``: the
+    start pose is jittered (``start_jitter``, default within 2 cm and ±1° of the path's start)
+    and the sensors' noise (``sensor_noise``) reaches the observation through the estimator, so
+    different seeds give different episodes and one seed gives the same one bit for bit.
+
     Episode end: terminated when the true progress reaches the path end or the true
     cross-track error exceeds ``max_cross_track_m``; truncated at ``max_episode_s`` or on a
     physics blow-up (``info["truncation_reason"]``).
@@ -73,34 +94,32 @@ class SlipEnv(gym.Env):
     Version history: v0 — first release.
     """
 
+    # The class lists every mode (so ``gym.make(id, render_mode="human")`` reaches the env,
+    # which says that the GUI needs a display); an instance lists the modes available on this
+    # machine (``human`` only with a display), which is what ``check_env`` tries one by one.
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
 
     def __init__(self, render_mode: str | None = None, config: SlipEnvConfig | None = None,
                  **kwargs: Any) -> None:
-        if render_mode not in (None, *self.metadata["render_modes"]):
+        # ``human`` is accepted even where it is not advertised: the simulator then says
+        # that the GUI needs a display.
+        if render_mode not in (None, "human", "rgb_array"):
             raise ValueError(
                 f"render_mode must be one of {self.metadata['render_modes']} or None, "
                 f"got {render_mode!r}"
             )
+        self._sim = None  # so close() and the finalizer work if construction fails
         self.config = SlipEnvConfig.from_kwargs(config, **kwargs)
-        if self.config.model:
-            # A fitted model extension (``slipenv diagnose``) rewrites the world's configuration.
-            from slipenv.diagnose.extension import apply_model
-
-            self.config = apply_model(self.config, self.config.model)
         cfg = self.config
         self.render_mode = render_mode
-        self.metadata = {**self.metadata, "render_fps": int(cfg.control_hz)}
-        from slipenv.envs.estimation import ESTIMATORS
-
-        if cfg.estimator not in ESTIMATORS:
-            raise ValueError(
-                f"unknown estimator {cfg.estimator!r}; known estimators: {sorted(ESTIMATORS)}"
-            )
+        self.metadata = {**self.metadata, "render_modes": render_modes(),
+                         "render_fps": int(cfg.control_hz)}
+        check_estimator_name(cfg.estimator)
         self._vehicle = make_vehicle(cfg.vehicle)
         self._path = self._make_path(cfg)
         soil_map = make_soil_map(cfg.soil, cfg.soil_map)
         force_model = make_force_model(cfg.force_model, self._vehicle)
+        beacons = self._make_beacons(cfg)
         self._sim = Simulator(
             self._vehicle, cfg.terrain, force_model, soil_map, physics_hz=cfg.physics_hz,
             control_hz=cfg.control_hz, gui=render_mode == "human",
@@ -108,11 +127,16 @@ class SlipEnv(gym.Env):
         self._dt_s = self._sim.control_dt_s
         self.max_steps = int(math.ceil(cfg.max_episode_s / self._dt_s))
         self._sensors = SensorSuite(self._vehicle.counts_per_rad, cfg.sensor_noise,
-                                   beacons=self._make_beacons(cfg))
+                                   beacons=beacons)
         self.observation_space = spaces.Box(OBS_LOW, OBS_HIGH, dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         self.estimator = None
         self._truth: VehicleTruth | None = None
+        self._trace: list[tuple[float, float]] = []  # true (x, y) per step, for render()
+        self._trace_est: list[tuple[float, float]] = []
+        self._path_xy: np.ndarray | None = None
+        # Build the estimator once now so that bad ``estimator_kwargs`` fail at make time.
+        self._build_estimator()
 
     # -- read-only surface for experiments and tools ----------------------------------------
     @property
@@ -157,44 +181,53 @@ class SlipEnv(gym.Env):
     def _make_path(self, cfg: SlipEnvConfig) -> Path:
         if isinstance(cfg.path, Path):
             return cfg.path
-        return path_by_name(cfg.path, **cfg.path_kwargs)
+        return make_path(cfg.path, cfg.path_kwargs)
 
     def _make_beacons(self, cfg: SlipEnvConfig):
         if cfg.beacons is None or cfg.beacons is False:
             return None
         from slipenv.sensors.beacons import BeaconScanner
 
-        if cfg.beacons is True or cfg.beacons == "default":
+        if cfg.beacons is True:
             return BeaconScanner()
         if isinstance(cfg.beacons, BeaconScanner):
             return cfg.beacons
         return BeaconScanner(beacons_xy=np.asarray(cfg.beacons, dtype=float))
 
+    def _jittered_start(self) -> tuple[float, float, float]:
+        """The path's start pose moved by the seeded ``start_jitter`` (uniform over a disc in
+        position, uniform in yaw)."""
+        x0, y0, yaw0 = self._path.start_pose()
+        radius_m, yaw_deg = self.config.start_jitter
+        u = self.np_random.uniform(0.0, 1.0, size=3)
+        r, bearing = radius_m * math.sqrt(u[0]), 2.0 * math.pi * u[1]
+        return (x0 + r * math.cos(bearing), y0 + r * math.sin(bearing),
+                wrap_angle(yaw0 + math.radians(yaw_deg) * (2.0 * u[2] - 1.0)))
+
+    def _build_estimator(self):
+        return build_estimator(self.config.estimator, self.config.estimator_kwargs,
+                               self._vehicle, self._estimator_context())
+
     # -- gymnasium API ---------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        x0, y0, yaw0 = self._path.start_pose()
+        x0, y0, yaw0 = self._jittered_start()
         truth = self._sim.reset(x0, y0, yaw0)
         self._truth = truth
         self._sensors.reset()
         frame = self._sensors.measure(truth, self.np_random)
-        self.estimator = make_estimator(
-            self.config.estimator, self._vehicle, self._estimator_context(),
-            **self.config.estimator_kwargs,
-        )
+        self.estimator = self._build_estimator()
         estimate = self.estimator.reset(x0, y0, yaw0, frame)
         self._steps = 0
         self._s_est = self._s_true = 0.0
         self._last_action = np.zeros(2, dtype=np.float32)
+        self._trace, self._trace_est = [], []
+        self._record(truth, estimate)
         obs = self._observe(estimate)
         return obs, self._info(truth, estimate, frame, {})
 
     def step(self, action):
-        action = np.asarray(action, dtype=np.float64).reshape(-1)
-        if action.shape != (2,):
-            raise ValueError(f"action must have shape (2,), got {np.shape(action)}")
-        if not np.all(np.isfinite(action)):
-            raise ValueError(f"action contains NaN or inf: {action.tolist()}")
+        action = check_action(action)
         if self.estimator is None:
             raise RuntimeError("call reset() before step()")
         a = np.clip(action, -1.0, 1.0)
@@ -212,6 +245,7 @@ class SlipEnv(gym.Env):
         self._truth = truth
         frame = self._sensors.measure(truth, self.np_random)
         estimate = self.estimator.update(frame)
+        self._record(truth, estimate)
         obs = self._observe(estimate)
 
         x, y, _ = truth.position_m
@@ -246,36 +280,43 @@ class SlipEnv(gym.Env):
             truth, estimate, frame, extra)
 
     def render(self):
+        """``rgb_array``: a (480, 640, 3) uint8 north-up map with the reference path (blue),
+        the true trace (red), the estimate's trace (orange) and the chassis at its true pose
+        (see :mod:`slipenv.envs.render`); ``None`` before ``reset`` or in other modes."""
         if self.render_mode != "rgb_array" or self._truth is None:
             return None
-        x, y, z = self._truth.position_m
-        size = max(self._vehicle.chassis_size_m)
-        view = p.computeViewMatrixFromYawPitchRoll(
-            [x, y, z], 4.0 * size, math.degrees(self._truth.yaw_rad) - 90.0, -30.0, 0.0, 2,
-            physicsClientId=self._sim.client,
-        )
-        proj = p.computeProjectionMatrixFOV(60.0, 4 / 3, 0.05, 100.0,
-                                            physicsClientId=self._sim.client)
-        _, _, rgba, _, _ = p.getCameraImage(
-            320, 240, view, proj, renderer=p.ER_TINY_RENDERER, physicsClientId=self._sim.client
-        )
-        return np.asarray(rgba, dtype=np.uint8).reshape(240, 320, 4)[:, :, :3]
+        if self._path_xy is None:
+            samples = sample_path(self._path, ds_m=max(self._path.length_m / 2000.0, 0.01))
+            self._path_xy = np.stack([samples.x_m, samples.y_m], axis=1)
+        x, y, _ = self._truth.position_m
+        length_m, width_m, _ = self._vehicle.chassis_size_m
+        return render_map(self._path_xy, np.array(self._trace), np.array(self._trace_est),
+                          (x, y, self._truth.yaw_rad), (length_m, width_m))
 
     def close(self) -> None:
-        if getattr(self, "sim", None) is not None:
+        """Disconnect the physics client (idempotent; a dropped env is also released by the
+        simulator's finalizer)."""
+        if getattr(self, "_sim", None) is not None:
             self._sim.close()
-            self._sim = None
 
     # -- helpers ---------------------------------------------------------------------------
     def _estimator_context(self) -> dict:
         """What an estimator may be told beyond the nominal geometry: the control period, the
         surveyed beacon positions, and (for ``*_oracle`` estimators only) the true soil."""
         beacons = self._sensors.beacons
+        # A weak reference: an estimator that kept the context must not keep the env (and its
+        # physics client) alive through a reference cycle.
+        true_soil = weakref.WeakMethod(self.true_soil)
         return {
             "dt_s": self._dt_s,
             "beacons_xy": None if beacons is None else beacons.beacons_xy,
-            "true_soil": self.true_soil,
+            "true_soil": lambda: true_soil()(),
         }
+
+    def _record(self, truth: VehicleTruth, estimate: PoseEstimate) -> None:
+        if self.render_mode == "rgb_array":
+            self._trace.append(truth.position_m[:2])
+            self._trace_est.append((estimate.x_m, estimate.y_m))
 
     def _observe(self, estimate: PoseEstimate) -> np.ndarray:
         self._last_estimate = estimate

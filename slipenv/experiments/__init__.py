@@ -1,8 +1,11 @@
 """The source papers' experiments re-run in simulation (``slipenv reproduce NAME``).
 
-Each experiment module registers itself in :data:`EXPERIMENTS` with a function
-``run(quick: bool, out_dir: str, json_path: str | None, seed: int, progress: bool) -> dict``
-returning ``{"metrics": {...}, "paper": {...}}`` and printing a paper-vs-simulation table.
+Each experiment is a sub-package (:mod:`.lindgren`, :mod:`.yamauchi`) whose ``run`` function,
+``run(quick: bool, out_dir: str, json_path: str | None, seed: int, progress: bool,
+docs_dir: str | None) -> dict``, returns ``{"metrics": {...}, "paper": {...}, ...}``, prints a
+paper-vs-simulation table and, with ``docs_dir``, writes the results page
+``docs_dir/NAME.md`` (:mod:`.docs_page`; the committed pages are in ``docs/reproductions/``).
+Every episode runs through :func:`slipenv.rollout.rollout`.
 """
 
 from __future__ import annotations

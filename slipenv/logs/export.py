@@ -4,8 +4,10 @@ Every simulated episode can become a measured-style log: wheel commands, encoder
 torques, IMU, inclinometer, compass and the ground-truth pose, with a ``meta.json`` holding the
 vehicle's *nominal* geometry (what an operator believes) and the terrain. Two entry points:
 
-- :func:`export_episode` runs a ``SlipEnv`` episode (a policy or a list of actions) and records
-  its sensor frames (``info["sensors"]``) and true pose (``info["true_pose"]``);
+- :func:`export_episode` runs a ``SlipEnv`` episode (a policy or a list of actions) through the
+  one rollout loop with an :class:`ExportRecorder`, which records its sensor frames
+  (``info["sensors"]``) and true pose (``info["true_pose"]``); the recorder also rides along
+  any other ``rollout`` call;
 - :class:`LogRecorder` collects frames from a bare :class:`~slipenv.sim.simulator.Simulator`
   loop (``record(t, frame, truth, commands)``) and builds the log.
 
@@ -16,6 +18,7 @@ sensor or an IMU.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Iterable
 from typing import Any
@@ -25,7 +28,9 @@ import numpy as np
 from slipenv.contracts.frame import SensorFrame
 from slipenv.logs.log import Log
 from slipenv.logs.meta import LogMeta
+from slipenv.rollout import rollout
 from slipenv.terrain.terrain import TerrainSpec
+from slipenv.vehicles.kinematics import twist_to_commands
 from slipenv.vehicles.spec import VehicleSpec
 
 OPTIONAL_GROUPS = ("cmd", "torque", "imu", "attitude", "heading")
@@ -64,10 +69,7 @@ class LogRecorder:
 
     def __init__(self, meta: LogMeta, columns: Iterable[str] | None = None) -> None:
         keep = set(OPTIONAL_GROUPS if columns is None else columns)
-        unknown = keep - set(OPTIONAL_GROUPS)
-        if unknown:
-            raise ValueError(f"unknown column group(s) {sorted(unknown)}; choose from "
-                             f"{OPTIONAL_GROUPS}")
+        _check_columns(keep)
         self.meta, self.keep = meta, keep
         self.rows: list[dict[str, float]] = []
 
@@ -110,11 +112,88 @@ class LogRecorder:
         return Log.from_arrays(self.meta, **cols)
 
 
+class ExportRecorder:
+    """Rollout recorder that turns an episode into a slipenv-log/1 log.
+
+    Keeps the reset sample and one row per step: the sensor frame (``info["sensors"]``), the
+    true pose (``info["true_pose"]``) and the channel speed commands [rad/s] (and steering
+    angles) that the step's action became through the vehicle's nominal kinematics — the same
+    conversion the env applies. A step without a sensor frame (a physics blow-up) is not kept.
+
+    Parameters
+    ----------
+    columns : iterable of str, optional
+        Optional column groups to keep (``OPTIONAL_GROUPS``); default all.
+    notes : str
+        ``meta.json`` notes.
+    seed : int, optional
+        Recorded in ``meta.json`` (``simulation.seed``).
+    """
+
+    def __init__(self, columns: Iterable[str] | None = None, notes: str = "",
+                 seed: int | None = None) -> None:
+        self.columns = None if columns is None else list(columns)
+        self.notes, self.seed = notes, seed
+        self._rec: LogRecorder | None = None
+        self._spec: VehicleSpec | None = None
+        if self.columns is not None:  # fail before the episode runs
+            _check_columns(self.columns)
+
+    def on_reset(self, env, obs: np.ndarray, info: dict) -> None:
+        base = env.unwrapped
+        spec, cfg = base.vehicle, base.config
+        soil = cfg.soil if isinstance(cfg.soil, str) else getattr(cfg.soil, "name", "custom")
+        meta = meta_for(spec, cfg.terrain, soil, counts_per_rad=cfg.sensor_noise.counts_per_rad,
+                        notes=self.notes,
+                        simulation={"env": getattr(env.spec, "id", None), "seed": self.seed,
+                                    "vehicle": spec.name, "soil": soil})
+        self._spec = spec
+        self._rec = LogRecorder(meta, self.columns)
+        self._rec.record(info["sensors"], info["true_pose"], np.zeros(len(spec.channels)))
+
+    def on_step(self, env, action: np.ndarray, obs: np.ndarray, reward: float,
+                terminated: bool, truncated: bool, info: dict) -> None:
+        if self._rec is None or self._spec is None:
+            raise RuntimeError("ExportRecorder.on_step before on_reset")
+        if "sensors" not in info:  # a physics blow-up ends the episode without a frame
+            return
+        spec = self._spec
+        a = np.clip(np.asarray(action, dtype=float).reshape(-1), -1.0, 1.0)
+        speeds, steer = twist_to_commands(spec, a[0] * spec.max_speed_mps,
+                                          a[1] * spec.max_yaw_rate_rad_s)
+        self._rec.record(info["sensors"], info["true_pose"], speeds, _channel_steer(spec, steer))
+
+    def to_log(self) -> Log:
+        """The validated log of the last episode."""
+        if self._rec is None:
+            raise ValueError("nothing recorded")
+        return self._rec.to_log()
+
+
+def _check_columns(columns: Iterable[str]) -> None:
+    unknown = set(columns) - set(OPTIONAL_GROUPS)
+    if unknown:
+        raise ValueError(f"unknown column group(s) {sorted(unknown)}; choose from "
+                         f"{OPTIONAL_GROUPS}")
+
+
+class _ActionSequence:
+    """A fixed list of actions as a policy (``rollout`` stops when it is used up)."""
+
+    def __init__(self, actions: list[Any]) -> None:
+        self.actions, self.k = actions, 0
+
+    def __call__(self, obs: np.ndarray) -> Any:
+        action = self.actions[self.k]
+        self.k += 1
+        return action
+
+
 def export_episode(env, policy: Callable[[np.ndarray], Any] | None = None,
                    actions: Iterable[Any] | None = None, seed: int | None = None,
                    max_steps: int | None = None, columns: Iterable[str] | None = None,
                    notes: str = "") -> Log:
-    """Run one ``SlipEnv`` episode and return it as a log.
+    """Run one ``SlipEnv`` episode (in :func:`slipenv.rollout.rollout`) and return it as a log.
 
     Parameters
     ----------
@@ -131,39 +210,17 @@ def export_episode(env, policy: Callable[[np.ndarray], Any] | None = None,
     columns : iterable of str, optional
         Optional column groups to keep (``OPTIONAL_GROUPS``).
     """
-    from slipenv.vehicles.kinematics import twist_to_commands
-
     if (policy is None) == (actions is None):
         raise ValueError("give exactly one of policy and actions")
-    base = env.unwrapped
-    spec, cfg = base.vehicle, base.config
-    soil = cfg.soil if isinstance(cfg.soil, str) else getattr(cfg.soil, "name", "custom")
-    meta = meta_for(spec, cfg.terrain, soil, counts_per_rad=cfg.sensor_noise.counts_per_rad,
-                    notes=notes, simulation={"env": getattr(env.spec, "id", None), "seed": seed,
-                                             "vehicle": spec.name, "soil": soil})
-    rec = LogRecorder(meta, columns)
-    obs, info = env.reset(seed=seed)
-    rec.record(info["sensors"], info["true_pose"], np.zeros(len(spec.channels)))
-    feed = iter(actions) if actions is not None else None
-    step = 0
-    while max_steps is None or step < max_steps:
-        if feed is not None:
-            action = next(feed, None)
-            if action is None:
-                break
-        else:
-            action = policy.predict(obs)[0] if hasattr(policy, "predict") else policy(obs)
-        a = np.clip(np.asarray(action, dtype=float).reshape(-1), -1.0, 1.0)
-        speeds, steer = twist_to_commands(spec, a[0] * spec.max_speed_mps,
-                                          a[1] * spec.max_yaw_rate_rad_s)
-        obs, _, terminated, truncated, info = env.step(action)
-        step += 1
-        if "sensors" not in info:  # a physics blow-up ends the episode without a frame
-            break
-        rec.record(info["sensors"], info["true_pose"], speeds, _channel_steer(spec, steer))
-        if terminated or truncated:
-            break
-    return rec.to_log()
+    recorder = ExportRecorder(columns, notes=notes, seed=seed)
+    if actions is not None:
+        feed = list(actions if max_steps is None else itertools.islice(actions, max_steps))
+        if not feed:
+            raise ValueError("actions is empty")
+        policy = _ActionSequence(feed)
+        max_steps = len(feed)
+    rollout(env, policy, seed=seed, max_steps=max_steps, recorders=[recorder])
+    return recorder.to_log()
 
 
 def _channel_steer(spec: VehicleSpec, steer: list[float]) -> list[float]:

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from slipenv.logs.bounds import first_out_of_bounds, signal_bound
 from slipenv.logs.errors import LogFormatError
 from slipenv.logs.meta import LogMeta, validate_meta
 
@@ -85,6 +86,12 @@ def validate_signals(
         bad = np.flatnonzero(np.isinf(values))
         if bad.size:
             raise fail("infinite value", name, int(bad[0]))
+        bound = signal_bound(name, meta.wheels)
+        if bound is not None:
+            k = first_out_of_bounds(values, bound[0])
+            if k is not None:
+                raise fail(f"value {float(values[k])!r} is physically implausible (|{name}| "
+                           f"<= {bound[0]:g} {bound[1]}; see slipenv.logs.bounds)", name, k)
     t = signals["t"]
     enc = [f"enc_{w}" for w in meta.wheels]
     for name in ["t", *enc]:

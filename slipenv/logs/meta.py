@@ -13,6 +13,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from slipenv.logs.bounds import META_BOUNDS, meta_range_text, meta_value_ok
 from slipenv.logs.errors import LogFormatError
 
 FORMAT = "slipenv-log/1"
@@ -240,6 +241,12 @@ def validate_meta(data: Any, path: str | Path, text: str | None = None) -> None:
     terrain = data.get("terrain", {})
     if terrain is not None:
         _validate_terrain(terrain, fail)
+    for (section, key) in META_BOUNDS:
+        value = (data.get(section) or {}).get(key)
+        if _finite(value) and not meta_value_ok((section, key), value):
+            raise fail([section, key], f"'{key}' = {value!r} is physically implausible "
+                                       f"(allowed {meta_range_text((section, key))}; see "
+                                       "slipenv.logs.bounds)")
     if data.get("notes") is not None and not isinstance(data["notes"], str):
         raise fail(["notes"], "'notes' must be a string")
 

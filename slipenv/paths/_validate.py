@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Sequence
 
 
@@ -42,11 +43,16 @@ def point(name: str, value: Sequence[float]) -> tuple[float, float]:
     return finite(f"{name}[0]", x), finite(f"{name}[1]", y)
 
 
-def count(name: str, value: int, minimum: int = 1) -> int:
-    """Return ``value`` if it is an integer >= ``minimum``, else raise ``ValueError``."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return value
+MAX_COUNT = 1000  # gates, legs, rows: each adds segments that every projection may scan
+
+
+def count(name: str, value: int, minimum: int = 1, maximum: int = MAX_COUNT) -> int:
+    """Return ``value`` if it is an integer in [``minimum``, ``maximum``], else raise
+    ``ValueError`` naming ``name``."""
+    if (isinstance(value, bool) or not isinstance(value, numbers.Integral)
+            or not minimum <= value <= maximum):
+        raise ValueError(f"{name} must be an integer in [{minimum}, {maximum}], got {value!r}")
+    return int(value)
 
 
 def speeds(v0_mps: float, v1_mps: float) -> tuple[float, float]:

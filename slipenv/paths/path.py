@@ -14,6 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from slipenv.contracts import wrap_angle
 from slipenv.paths import _validate as check
 from slipenv.paths.segments import Nearest, Segment
 
@@ -92,7 +93,7 @@ class Path:
             gap = math.hypot(xb - xa, yb - ya)
             if gap > CONTINUITY_TOL_M:
                 raise ValueError(f"segments {i} and {i + 1} do not join: gap {gap:.3g} m")
-            turn = abs(_wrap(b.heading(0.0) - a.heading(a.length_m)))
+            turn = abs(wrap_angle(b.heading(0.0) - a.heading(a.length_m)))
             if turn > CONTINUITY_TOL_RAD:
                 raise ValueError(f"segments {i} and {i + 1} meet at a corner of {turn:.3g} rad")
             if abs(a.v1_mps - b.v0_mps) > CONTINUITY_TOL_MPS:
@@ -228,8 +229,3 @@ def sample_path(path: Path, ds_m: float = 0.05) -> PathSamples:
         out[4, k] = seg.speed(ds)
         out[5, k] = path.time_at(float(sk))
     return PathSamples(s, *out)
-
-
-def _wrap(angle: float) -> float:
-    """Wrap an angle to (-pi, pi] [rad]."""
-    return math.pi - (math.pi - angle) % (2.0 * math.pi)

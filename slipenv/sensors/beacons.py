@@ -48,6 +48,48 @@ def default_beacons_xy() -> np.ndarray:
     return np.array(out)
 
 
+MAX_BEACONS = 1000  # every scan costs O(beacons)
+MAX_BEACON_COORD_M = 1e4  # [m] a survey of a field, not of a continent
+MAX_SCAN_RATE_HZ = 100.0  # [1/s] head revolutions; Lindgren's is 3.6
+MAX_CLUTTER_RATE_HZ = 1000.0  # [1/s]
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+
+def as_beacons_xy(value, name: str = "beacons") -> np.ndarray:
+    """Surveyed beacon positions as a float (m, 2) array [m], checked.
+
+    Parameters
+    ----------
+    value : array_like, shape (m, 2)
+        Positions [m]: 1 <= m <= 1000, every coordinate finite and within 10 km of the origin.
+    name : str
+        Option named in errors.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name`` if ``value`` is not numeric, not (m, 2), empty, or out of range.
+    """
+    if isinstance(value, (str, bytes, dict)):
+        raise ValueError(f"{name} must be an (n, 2) array of beacon positions [m], "
+                         f"got {type(value).__name__} {value!r}")
+    try:
+        b = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an (n, 2) array of beacon positions [m] (numbers), "
+                         f"got {value!r}") from None
+    if b.ndim != 2 or b.shape[1] != 2 or not 1 <= b.shape[0] <= MAX_BEACONS:
+        raise ValueError(f"{name} must be an (n, 2) array of beacon positions [m] with "
+                         f"1 <= n <= {MAX_BEACONS}, got shape {b.shape}")
+    if not np.all(np.isfinite(b)) or np.max(np.abs(b)) > MAX_BEACON_COORD_M:
+        raise ValueError(f"{name} positions must be finite and within {MAX_BEACON_COORD_M:g} m "
+                         "of the origin")
+    return b
+
+
 class BeaconScanner:
     """Rotating bearing-only beacon scanner (Lindgren §2.4).
 
@@ -83,15 +125,21 @@ class BeaconScanner:
         clutter_rate_hz: float = 0.0,
         head_phase_rad: float = 0.0,
     ) -> None:
-        b = default_beacons_xy() if beacons_xy is None else np.asarray(beacons_xy, dtype=float)
-        if b.ndim != 2 or b.shape[1] != 2 or b.shape[0] == 0 or not np.all(np.isfinite(b)):
-            raise ValueError(f"beacons_xy must be a finite (m, 2) array, got shape {b.shape}")
+        b = default_beacons_xy() if beacons_xy is None else as_beacons_xy(beacons_xy, "beacons_xy")
         for name, value in (("scan_rate_hz", scan_rate_hz), ("max_range_m", max_range_m),
                             ("fov_rad", fov_rad)):
-            if not (math.isfinite(value) and value > 0.0):
+            if not (_is_number(value) and math.isfinite(value) and value > 0.0):
                 raise ValueError(f"BeaconScanner.{name} must be finite and > 0, got {value!r}")
+        for name, value in (("bearing_var_rad2", bearing_var_rad2),
+                            ("clutter_rate_hz", clutter_rate_hz),
+                            ("head_phase_rad", head_phase_rad)):
+            if not (_is_number(value) and math.isfinite(value)):
+                raise ValueError(f"BeaconScanner.{name} must be a finite number, got {value!r}")
         if not (bearing_var_rad2 >= 0.0 and clutter_rate_hz >= 0.0):
             raise ValueError("bearing_var_rad2 and clutter_rate_hz must be >= 0")
+        if scan_rate_hz > MAX_SCAN_RATE_HZ or clutter_rate_hz > MAX_CLUTTER_RATE_HZ:
+            raise ValueError(f"BeaconScanner.scan_rate_hz must be <= {MAX_SCAN_RATE_HZ:g} and "
+                             f"clutter_rate_hz <= {MAX_CLUTTER_RATE_HZ:g} [1/s]")
         self.beacons_xy = b
         self.scan_rate_hz = float(scan_rate_hz)
         self.bearing_var_rad2 = float(bearing_var_rad2)

@@ -6,6 +6,14 @@ import math
 from dataclasses import dataclass, fields
 
 G_MPS2 = 9.81
+# Largest value of each field that still describes a working sensor (beyond it the reading
+# is noise, not a measurement): 1 g^2 accelerometer variance, 1 (rad/s)^2 gyro variance and
+# 1 rad/s bias, 100 % torque noise, a 100x torque scale, pi rad angle noise.
+MAX_NOISE = {
+    "counts_per_rad": 1e7, "acc_x_var_g2": 1.0, "acc_y_var_g2": 1.0, "gyro_var_rad2_s2": 1.0,
+    "gyro_bias_rad_s": 1.0, "torque_rel_std": 1.0, "torque_scale": 100.0,
+    "incl_std_rad": math.pi, "compass_std_rad": math.pi,
+}
 
 
 @dataclass(frozen=True)
@@ -30,6 +38,11 @@ class SensorNoise:
         Inclinometer noise standard deviation [rad] (assumed 0.5°).
     compass_std_rad : float
         Compass noise standard deviation [rad] (assumed 2°).
+
+    Notes
+    -----
+    Every field is a finite number >= 0 (the gyro bias may be negative) and at most
+    :data:`MAX_NOISE` in magnitude; anything else is a ``ValueError`` naming the field.
     """
 
     counts_per_rad: float | None = None
@@ -47,10 +60,14 @@ class SensorNoise:
             value = getattr(self, f.name)
             if value is None and f.name == "counts_per_rad":
                 continue
-            if not isinstance(value, (int, float)) or not math.isfinite(value):
+            if (not isinstance(value, (int, float)) or isinstance(value, bool)
+                    or not math.isfinite(value)):
                 raise ValueError(f"SensorNoise.{f.name} must be a finite number, got {value!r}")
             if f.name != "gyro_bias_rad_s" and value < 0:
                 raise ValueError(f"SensorNoise.{f.name} must be >= 0, got {value!r}")
+            if abs(value) > MAX_NOISE[f.name]:
+                raise ValueError(f"SensorNoise.{f.name} must be <= {MAX_NOISE[f.name]:g} in "
+                                 f"magnitude (a working sensor), got {value!r}")
         if self.counts_per_rad is not None and self.counts_per_rad <= 0:
             raise ValueError(f"SensorNoise.counts_per_rad must be > 0, got {self.counts_per_rad}")
 

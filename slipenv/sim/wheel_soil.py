@@ -1,27 +1,17 @@
 """Inject the terramechanic force law at every wheel contact, every physics substep.
 
 Per substep: one batched query each for contacts, wheel link states and spin-joint states;
-scalar kinematics per wheel; the force law; one ``applyExternalForce`` per loaded wheel at its
-contact patch. Tiny numpy arrays per wheel cost more than the physics (DESIGN §6), so the
-substep loop is plain float arithmetic: force models that offer ``scalar(...)`` (all of
-slipenv's do) are called per wheel with floats; any other :class:`ForceModel` is called once
-per substep on arrays. The soil under each wheel is sampled from the soil map once per control
-step (a wheel moves millimetres in one step; maps blend over decimetres).
+per wheel, the contact frame, the slip state, the force law and the soil dampers in plain float
+arithmetic (tiny numpy arrays per wheel cost more than the physics, DESIGN §6); one
+``applyExternalForce`` per loaded wheel at its contact patch and one at its centre for the
+resistance. The physics is not written here: the force law is the model's float kernel
+(`slipenv.terramechanics.wheel_kernel`), and the slip relaxation step, the two soil dampers
+and the resistance ramp are the plain functions of `slipenv.terramechanics.slip_dynamics`
+(sources and equations there). The soil under each wheel is sampled from the soil map once per
+control step (a wheel moves millimetres in one step; maps blend over decimetres).
 
-Slip (the convention of ``slipenv.terramechanics``): s = (r ω - v) / max(|r ω|, |v|), in
-[-1, 1], > 0 in drive; tan β = v_lat / |v_long|. Both are *states* with a relaxation length σ,
-as in tyre models (Pacejka, Tyre and Vehicle Dynamics, §7.2.1):
-
-    σ ds/dt + V s = r ω - v,        σ db/dt + V b = v_lat,        V = max(|r ω|, |v|, |v_lat|)
-
-whose steady state is the kinematic slip (with one reference speed V for both components, so
-that (s, tan β) keeps the direction of the contact point's sliding velocity at large slip; at
-ordinary slip V = |r ω| ≈ |v| and tan β = v_lat/|v|). At standstill V = 0 and the state
-integrates the slip displacement, so a parked vehicle is held by a soil "spring" (the Janosi shear
-deformation) instead of creeping, and a wheel spinning at v = 0 reaches s = 1 with no
-division by zero. The update is backward Euler, unconditionally stable for this linear ODE,
-which keeps a light wheel smooth even when its spin time constant falls below the time step
-(DESIGN §3). σ is the soil's shear deformation modulus K (Janosi), floored at
+Slip follows the convention of ``slipenv.terramechanics.contact``; the slip states relax over
+a length sigma = the soil's shear deformation modulus K (Janosi), floored at
 ``min_relaxation_m``.
 """
 
@@ -33,10 +23,21 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as p
 
-from slipenv.terramechanics.models import ForceModel
+from slipenv.terramechanics.models import ForceModel, wheel_kernel
+from slipenv.terramechanics.slip_dynamics import (
+    critical_damping_ns_per_m,
+    lateral_soil_damping_n,
+    longitudinal_soil_damping_n,
+    relax_slip,
+    resistance_along_travel_n,
+)
+from slipenv.terramechanics.soil import SoilParams
 from slipenv.terramechanics.soil_map import SoilMap, UniformSoil
 from slipenv.vehicles.body import VehicleBody
 from slipenv.vehicles.spec import VehicleSpec
+
+_G = 9.81  # [m/s^2] gravity, for the static load share the dampers are sized at
+_DS = 1e-3  # [-] slip step of the finite-difference slip stiffness
 
 
 @dataclass
@@ -112,6 +113,14 @@ class WheelSoilInjector:
         damping_ratio: float = 0.5,
         damping_speed_mps: float = 0.2,
     ) -> None:
+        for key, value in (("dt_s", dt_s), ("min_relaxation_m", min_relaxation_m),
+                           ("resistance_speed_mps", resistance_speed_mps),
+                           ("low_speed_mps", low_speed_mps),
+                           ("damping_speed_mps", damping_speed_mps)):
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"{key} must be finite and > 0, got {value!r}")
+        if not (math.isfinite(damping_ratio) and damping_ratio >= 0.0):
+            raise ValueError(f"damping_ratio must be finite and >= 0, got {damping_ratio!r}")
         self.client = client
         self.body_id = body.body_id
         self.ground_id = ground_id
@@ -119,14 +128,11 @@ class WheelSoilInjector:
         self.soil_map = soil_map
         self.dt_s = dt_s
         self.min_relaxation_m = min_relaxation_m
-        self.inv_resistance_speed = 1.0 / resistance_speed_mps
-        if not (math.isfinite(damping_ratio) and damping_ratio >= 0.0):
-            raise ValueError(f"damping_ratio must be finite and >= 0, got {damping_ratio!r}")
+        self.resistance_speed_mps = resistance_speed_mps
+        self.low_speed_mps = low_speed_mps
         self.damping_ratio = float(damping_ratio)
-        self.inv_low_speed = 1.0 / low_speed_mps
-        self.inv_damping_speed = 1.0 / damping_speed_mps
-        wheels_on_ground = len(spec.wheels)
-        self.mass_share_kg = spec.mass_kg / wheels_on_ground
+        self.damping_speed_mps = damping_speed_mps
+        self.mass_share_kg = spec.mass_kg / len(spec.wheels)
         self.n = len(spec.wheels)
         self.links = list(body.wheel_links)
         self.link_to_wheel = {link: k for k, link in enumerate(self.links)}
@@ -173,35 +179,43 @@ class WheelSoilInjector:
         kernels = {}
         for sp in rows:
             if id(sp) not in kernels:
-                kernels[id(sp)] = _kernel(self.force_model, sp)
+                kernels[id(sp)] = wheel_kernel(self.force_model, sp)
         self._kernels = [kernels[id(sp)] for sp in rows]
-        self._damping = [self._critical_damping(k) for k in range(self.n)]
+        self._damping = [self._soil_damping(k) for k in range(self.n)]
 
-    def _critical_damping(self, k: int) -> tuple[float, float]:
-        """Soil dampers of wheel ``k``: c_long [N s/m] on rω - v and d_lat [N per unit tan β].
+    def soil_at_wheel(self, k: int) -> SoilParams:
+        """The soil (floats) under wheel ``k`` at the last `sample_soil` (read-only)."""
+        return self._soil_rows[k]
+
+    def rolling_radius_m(self, k: int) -> float:
+        """Effective rolling radius r_eff [m] of wheel ``k`` on its current soil (read-only)."""
+        return float(self._r_eff[k])
+
+    def _soil_damping(self, k: int) -> tuple[float, float]:
+        """Soil dampers of wheel ``k``: c_long [N s/m] on rω - v and d_lat [N per unit Δtan β].
 
         The spring is the slip state held still: stiffness C/σ [N/m] with C = dF/ds at s = 0 of
-        the force law at the wheel's static load share (finite difference). Its damper c [N s/m]
-        is ``damping_ratio`` times critical for the wheel's mass share, capped at half the
-        explicit stability limit m/dt (a side force at the contact patch also rolls the body, so
-        the mass it moves is less than the share: at the full limit a tracked vehicle shakes
-        itself sideways at rest). Sideways it acts on the deformation rate σ dtanβ/dt, i.e.
-        d_lat = c σ / dt per unit change of the state in one substep.
+        the force law at the wheel's static load share (finite difference). Its damper
+        (`critical_damping_ns_per_m`) is ``damping_ratio`` times critical for the wheel's mass
+        share, capped at half the explicit stability limit m/dt (a side force at the contact
+        patch also rolls the body, so the mass it moves is less than the share: at the full
+        limit a tracked vehicle shakes itself sideways at rest). Sideways it acts on the
+        deformation rate σ dtanβ/dt, i.e. d_lat = c σ / dt per unit change of the state in one
+        substep (`lateral_soil_damping_n`).
         """
         if not self.driven[k]:
             return 0.0, 0.0
-        load = self.mass_share_kg * 9.81
-        fx, _, _ = self._kernels[k](1e-3, 0.0, load)
-        _, fy, _ = self._kernels[k](0.0, 1e-3, load)
+        load = self.mass_share_kg * _G
+        fx, _, _ = self._kernels[k](_DS, 0.0, load)
+        _, fy, _ = self._kernels[k](0.0, _DS, load)
         sigma = self.dt_s / self._h[k]
         cap = 0.5 * self.mass_share_kg / self.dt_s
-        c_long, c_lat = (
-            min(2.0 * self.damping_ratio * math.sqrt(stiffness / sigma * self.mass_share_kg), cap)
-            for stiffness in (abs(fx) / 1e-3, abs(fy) / 1e-3)
-        )
+        c_long, c_lat = (critical_damping_ns_per_m(stiffness, sigma, self.mass_share_kg,
+                                                   self.damping_ratio, cap)
+                         for stiffness in (abs(fx) / _DS, abs(fy) / _DS))
         return c_long, c_lat * sigma / self.dt_s
 
-    def _rolling_radius_m(self, soil_params, k: int) -> float:
+    def _rolling_radius_m(self, soil_params: SoilParams, k: int) -> float:
         if self.fixed_radius[k] is not None:  # a fitted model extension (slipenv diagnose)
             return self.fixed_radius[k]
         if bool(soil_params.deformable) and self.soil_radius[k] is not None:
@@ -210,13 +224,60 @@ class WheelSoilInjector:
 
     # -- the substep -----------------------------------------------------------------------
     def apply(self) -> None:
-        """Compute and apply the soil forces for the coming substep (the hot path)."""
+        """Compute and apply the soil forces for the coming substep (the hot path).
+
+        Per loaded wheel: the contact frame, then for a driven wheel the slip relaxation step,
+        the force law and the two soil dampers, applied at the contact patch; for every wheel
+        the motion resistance, applied at the wheel centre (compaction resistance comes from
+        normal stresses that point at the axle, so it puts no moment on the wheel).
+        """
         cid, bid, n = self.client, self.body_id, self.n
         contacts = p.getContactPoints(bodyA=bid, bodyB=self.ground_id, physicsClientId=cid)
         links = p.getLinkStates(bid, self.links, computeLinkVelocity=1, physicsClientId=cid)
         joints = p.getJointStates(bid, self.spin_joints, physicsClientId=cid)
-        load = [0.0] * n
-        acc = [None] * n  # load-weighted contact point and normal per wheel
+        load, patch = self._patches(contacts)
+        slip, tanb, kernels, damping = self.s, self.b, self._kernels, self._damping
+        h, r_eff, driven, spin_index, wheel_links = (self._h, self._r_eff, self.driven,
+                                                     self.spin_index, self.links)
+        fade_speed, low_speed = self.damping_speed_mps, self.low_speed_mps
+        ramp_speed = self.resistance_speed_mps
+        fx_out, fy_out, res_out = [0.0] * n, [0.0] * n, [0.0] * n
+        apply_force, world = p.applyExternalForce, p.WORLD_FRAME
+        for k in range(n):
+            w = load[k]
+            if w <= 0.0:
+                slip[k] = tanb[k] = 0.0
+                continue
+            ls = links[k]
+            cx, cy, cz, ex, ey, ez, lx, ly, lz, v_long, v_lat = _contact_kinematics(patch[k], w, ls)
+            if driven[k]:
+                r_omega = r_eff[k] * joints[spin_index[k]][1]
+                t_old = tanb[k]
+                s, t, v_ref = relax_slip(slip[k], t_old, r_omega, v_long, v_lat, h[k])
+                slip[k], tanb[k] = s, t
+                f_long, f_lat, res = kernels[k](s, t, w)
+                fx_out[k], fy_out[k] = f_long, f_lat
+                c_long, d_lat = damping[k]
+                f_lat += lateral_soil_damping_n(t - t_old, v_ref, d_lat, fade_speed)
+                f_long += longitudinal_soil_damping_n(r_omega, v_long, v_ref, c_long, low_speed)
+                # Shear (traction, side force) acts at the contact patch: the motor feels r F.
+                apply_force(bid, wheel_links[k],
+                            (f_long * ex + f_lat * lx, f_long * ey + f_lat * ly,
+                             f_long * ez + f_lat * lz), (cx, cy, cz), world, physicsClientId=cid)
+            else:
+                res = kernels[k](0.0, 0.0, w)[2]
+            r_k = resistance_along_travel_n(res, v_long, ramp_speed)
+            res_out[k] = abs(r_k)
+            if r_k != 0.0:
+                apply_force(bid, wheel_links[k], (-r_k * ex, -r_k * ey, -r_k * ez), ls[0], world,
+                            physicsClientId=cid)
+        self.load, self.fx, self.fy, self.res = load, fx_out, fy_out, res_out
+
+    def _patches(self, contacts: tuple) -> tuple[list[float], list[list[float] | None]]:
+        """Per wheel: the normal load W [N] and the load-weighted sums of its contact points and
+        normals ([Σf px, Σf py, Σf pz, Σf nx, Σf ny, Σf nz], or None off the ground)."""
+        load = [0.0] * self.n
+        patch: list[list[float] | None] = [None] * self.n
         link_to_wheel = self.link_to_wheel
         for cp in contacts:
             f = cp[9]
@@ -227,9 +288,9 @@ class WheelSoilInjector:
                 self.chassis_contact = True
                 continue
             pos, nrm = cp[6], cp[7]
-            a = acc[k]
+            a = patch[k]
             if a is None:
-                acc[k] = [f * pos[0], f * pos[1], f * pos[2], f * nrm[0], f * nrm[1], f * nrm[2]]
+                patch[k] = [f * pos[0], f * pos[1], f * pos[2], f * nrm[0], f * nrm[1], f * nrm[2]]
             else:
                 a[0] += f * pos[0]
                 a[1] += f * pos[1]
@@ -238,93 +299,7 @@ class WheelSoilInjector:
                 a[4] += f * nrm[1]
                 a[5] += f * nrm[2]
             load[k] += f
-
-        slip, tanb, h, r_eff, kernels = self.s, self.b, self._h, self._r_eff, self._kernels
-        fx_out, fy_out, res_out = [0.0] * n, [0.0] * n, [0.0] * n
-        inv_eps, inv_low, damping = self.inv_resistance_speed, self.inv_low_speed, self._damping
-        inv_damp_speed = self.inv_damping_speed
-        apply_force, world = p.applyExternalForce, p.WORLD_FRAME
-        for k in range(n):
-            w = load[k]
-            if w <= 0.0:
-                slip[k] = tanb[k] = 0.0
-                continue
-            a = acc[k]
-            inv_w = 1.0 / w
-            nx, ny, nz = a[3], a[4], a[5]
-            inv = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
-            nx, ny, nz = nx * inv, ny * inv, nz * inv
-            cx, cy, cz = a[0] * inv_w, a[1] * inv_w, a[2] * inv_w
-            ls = links[k]
-            qx, qy, qz, qw = ls[1]
-            # Axle = the link's y axis in world (the spin axis, invariant under spin).
-            ex = 2.0 * (qx * qy - qw * qz)
-            ey = 1.0 - 2.0 * (qx * qx + qz * qz)
-            ez = 2.0 * (qy * qz + qw * qx)
-            # Forward = axle × normal; lateral = normal × forward (to the left).
-            fx_, fy_, fz_ = ey * nz - ez * ny, ez * nx - ex * nz, ex * ny - ey * nx
-            inv = 1.0 / math.sqrt(fx_ * fx_ + fy_ * fy_ + fz_ * fz_)
-            fx_, fy_, fz_ = fx_ * inv, fy_ * inv, fz_ * inv
-            lx, ly, lz = ny * fz_ - nz * fy_, nz * fx_ - nx * fz_, nx * fy_ - ny * fx_
-            vx, vy, vz = ls[6]
-            v_long = vx * fx_ + vy * fy_ + vz * fz_
-            if self.driven[k]:
-                # Lateral slip is the sliding of the contact point, not of the wheel centre:
-                # add ω × (contact - centre), which removes the chassis roll (rate × radius)
-                # that would otherwise feed back into the side force.
-                px, py, pz = ls[0]
-                rx, ry, rz = cx - px, cy - py, cz - pz
-                wx, wy, wz = ls[7]
-                v_lat = ((vx + wy * rz - wz * ry) * lx + (vy + wz * rx - wx * rz) * ly
-                         + (vz + wx * ry - wy * rx) * lz)
-                hk = h[k]
-                r_omega = r_eff[k] * joints[self.spin_index[k]][1]
-                # One reference speed for both components, so that (s, tan β) points along
-                # the contact point's sliding velocity (rω - v, v_lat) even at large slip: the
-                # combined-slip laws split the resultant by this direction.
-                v_ref = max(abs(r_omega), abs(v_long), abs(v_lat))
-                s_old, t_old = slip[k], tanb[k]
-                s = (s_old + hk * (r_omega - v_long)) / (1.0 + hk * v_ref)
-                s = 1.0 if s > 1.0 else (-1.0 if s < -1.0 else s)
-                t = (t_old + hk * v_lat) / (1.0 + hk * v_ref)
-                t = 1.0 if t > 1.0 else (-1.0 if t < -1.0 else t)
-                slip[k], tanb[k] = s, t
-                f_long, f_lat, res = kernels[k](s, t, w)
-                fx_out[k], fy_out[k] = f_long, f_lat
-                # Side: shear-rate damping (LuGre's σ1 term), on the rate of the lateral shear
-                # deformation σ dtanβ/dt. It vanishes in steady side slip, so the force law
-                # stays exact, but damps the soil "spring" that the relaxation state is at
-                # crawling speed (a turning tracked vehicle otherwise rocks at several Hz).
-                c_long, d_lat = damping[k]
-                # Faded out with speed, as LuGre's σ1 is (Canudas de Wit et al. 2003): the
-                # relaxation leak V/σ damps the spring by itself once the wheel moves fast.
-                fade = v_ref * inv_damp_speed
-                fade *= fade
-                f_lat -= d_lat * (t - t_old) / (1.0 + fade * fade)
-                # Longitudinal: the same damper, on rω - v, but only near standstill (a braked
-                # wheel); when rolling, a damper at the patch would act on the wheel's small
-                # spin inertia and an explicit one would destabilise it.
-                speed = max(abs(v_long), abs(r_omega), abs(v_lat)) * inv_low
-                if speed < 1.0:
-                    f_long += (1.0 - speed) * c_long * (r_omega - v_long)
-                # Shear (traction, side force) acts at the contact patch: the motor feels r F.
-                apply_force(bid, self.links[k],
-                            (f_long * fx_ + f_lat * lx, f_long * fy_ + f_lat * ly,
-                             f_long * fz_ + f_lat * lz),
-                            (cx, cy, cz), world, physicsClientId=cid)
-            else:
-                res = kernels[k](0.0, 0.0, w)[2]
-            # Resistance opposes travel; a linear ramp below resistance_speed_mps keeps it
-            # continuous (and explicit-stable) through zero and exact above it.
-            ramp = v_long * inv_eps
-            r_k = res * (1.0 if ramp > 1.0 else (-1.0 if ramp < -1.0 else ramp))
-            res_out[k] = abs(r_k)
-            if r_k != 0.0:
-                # Compaction resistance comes from normal stresses that point at the axle: it
-                # acts through the wheel centre and puts no moment on the wheel.
-                apply_force(bid, self.links[k], (-r_k * fx_, -r_k * fy_, -r_k * fz_), ls[0],
-                            world, physicsClientId=cid)
-        self.load, self.fx, self.fy, self.res = load, fx_out, fy_out, res_out
+        return load, patch
 
     # -- reading ---------------------------------------------------------------------------
     def contact_state(self) -> WheelContactState:
@@ -342,24 +317,52 @@ class WheelSoilInjector:
         return [js[3] for js in states]
 
 
-def _kernel(model, soil):
-    """A per-wheel ``(slip, tan_beta, load) -> (fx, fy, resistance)`` for ``model`` on ``soil``.
+def _contact_kinematics(patch: list[float], load_n: float,
+                        link_state: tuple) -> tuple[float, ...]:
+    """Contact frame and sliding velocity of one wheel, in world coordinates.
 
-    slipenv's models give a float kernel; any other ForceModel is wrapped (correct, slower:
-    one vectorised call per wheel).
+    Parameters
+    ----------
+    patch : list of float
+        Load-weighted sums of the wheel's contact points and normals (see `_patches`).
+    load_n : float
+        The wheel's normal load W > 0 [N] (the sum of the weights).
+    link_state : tuple
+        The wheel link's ``getLinkStates`` entry (with velocities).
+
+    Returns
+    -------
+    tuple of 11 floats
+        Contact centre (3) [m], forward unit vector (3), left unit vector (3), v_long [m/s]
+        (wheel centre along forward) and v_lat [m/s] (contact point along left). The axle is
+        the link's y axis (the spin axis, invariant under spin); forward = axle x normal,
+        left = normal x forward. v_lat is the sliding of the contact point, v + ω × (contact -
+        centre), not of the wheel centre: this removes the chassis roll (rate × radius) that
+        would otherwise feed back into the side force.
     """
-    if hasattr(model, "scalar_kernel"):
-        return model.scalar_kernel(soil)
+    inv_w = 1.0 / load_n
+    cx, cy, cz = patch[0] * inv_w, patch[1] * inv_w, patch[2] * inv_w
+    nx, ny, nz = patch[3], patch[4], patch[5]
+    inv = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
+    nx, ny, nz = nx * inv, ny * inv, nz * inv
+    qx, qy, qz, qw = link_state[1]
+    ax = 2.0 * (qx * qy - qw * qz)
+    ay = 1.0 - 2.0 * (qx * qx + qz * qz)
+    az = 2.0 * (qy * qz + qw * qx)
+    fx, fy, fz = ay * nz - az * ny, az * nx - ax * nz, ax * ny - ay * nx
+    inv = 1.0 / math.sqrt(fx * fx + fy * fy + fz * fz)
+    fx, fy, fz = fx * inv, fy * inv, fz * inv
+    lx, ly, lz = ny * fz - nz * fy, nz * fx - nx * fz, nx * fy - ny * fx
+    px, py, pz = link_state[0]
+    vx, vy, vz = link_state[6]
+    wx, wy, wz = link_state[7]
+    rx, ry, rz = cx - px, cy - py, cz - pz
+    return (cx, cy, cz, fx, fy, fz, lx, ly, lz, vx * fx + vy * fy + vz * fz,
+            (vx + wy * rz - wz * ry) * lx + (vy + wz * rx - wx * rz) * ly
+            + (vz + wx * ry - wy * rx) * lz)
 
-    def kernel(slip: float, tan_beta: float, load_n: float) -> tuple[float, float, float]:
-        w = np.array([load_n])
-        fx, fy = model(np.array([slip]), np.array([tan_beta]), w, soil)
-        return float(fx[0]), float(fy[0]), float(model.resistance_n(w, soil)[0])
 
-    return kernel
-
-
-def _params_row(params, k: int):
+def _params_row(params: SoilParams, k: int) -> SoilParams:
     """The soil parameters of wheel ``k`` from per-wheel arrays (scalars pass through)."""
     return type(params)(*(
         (v[k] if isinstance(v, np.ndarray) and v.ndim else v) for v in params

@@ -1,4 +1,4 @@
-"""Wheel-soil force laws for slip-aware simulation: pure, vectorised numpy, no PyBullet.
+"""Wheel-soil force laws for slip-aware simulation: plain functions, no PyBullet.
 
 Modules
 -------
@@ -9,11 +9,18 @@ janosi, lindgren, reina, bekker
     Plain force laws, each citing its paper and equation: Janosi-Hanamoto shear and Okello's
     thrust curve (Lindgren Eq. 2-3, 18-24), the linear torque-slip law and the rolling-radius
     error (Lindgren Eq. 24-31), Reina's combined slip (Reina Eq. 5-12), Bekker sinkage and
-    compaction resistance.
+    compaction resistance. The laws the simulation injects (`janosi_forces`,
+    `linear_slip_forces`, `reina_forces`) are written once, in plain floats.
+vectorize
+    Their array versions, derived generically from the scalar code (`array_law`,
+    `forces_on_arrays`).
 contact, models
     The slip/sign convention (in `contact`'s docstring, used everywhere), `ContactGeometry`,
-    and the `ForceModel` contract with its three implementations, called by the simulation at
-    every physics substep.
+    and the `ForceModel` contract with its three implementations; `wheel_kernel(model, soil)`
+    is the per-wheel float kernel the simulation calls at every physics substep.
+slip_dynamics
+    Slip as a state: the relaxation-length step, the two soil dampers and the resistance ramp
+    (Pacejka §7.2.1; LuGre), plain float functions called by the simulation per wheel.
 soil_map
     Soils varying over the ground: `UniformSoil`, `PatchSoilMap`, `GridSoilMap`.
 """
@@ -26,6 +33,7 @@ from slipenv.terramechanics.models import (
     LinearSlipForceModel,
     ReinaForceModel,
     force_model_by_name,
+    wheel_kernel,
 )
 from slipenv.terramechanics.presets import (
     CONCRETE,
@@ -35,6 +43,13 @@ from slipenv.terramechanics.presets import (
     SOILS,
     TOYOURA_SAND,
     soil_by_name,
+)
+from slipenv.terramechanics.slip_dynamics import (
+    critical_damping_ns_per_m,
+    lateral_soil_damping_n,
+    longitudinal_soil_damping_n,
+    relax_slip,
+    resistance_along_travel_n,
 )
 from slipenv.terramechanics.soil import PARAM_FIELDS, Soil, SoilParams
 from slipenv.terramechanics.soil_map import (
@@ -70,7 +85,13 @@ __all__ = [
     "SoilMap",
     "SoilParams",
     "UniformSoil",
+    "critical_damping_ns_per_m",
     "force_model_by_name",
+    "lateral_soil_damping_n",
+    "longitudinal_soil_damping_n",
+    "relax_slip",
+    "resistance_along_travel_n",
     "slip_ratio",
     "soil_by_name",
+    "wheel_kernel",
 ]

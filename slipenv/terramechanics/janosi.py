@@ -8,15 +8,24 @@ p = W/A). Integrating q over the patch gives the thrust
     F(s) = (A c + W tan phi) [1 - (K/(sL)) (1 - e^{-sL/K})],
 
 which is Okello's curve C_T = A[1 - (B/s)(1 - e^{-s/B})] (Lindgren Eq. 18-20) with amplitude
-F_max = A c + W tan phi and shape B = K/L. All functions broadcast over numpy arrays.
+F_max = A c + W tan phi and shape B = K/L.
+
+`janosi_forces` is the combined-slip force law the simulation injects, in plain floats (it is
+called per wheel and per physics substep); `okello_secant` is its curve's shape on arrays, derived
+from the same scalar code. The other functions broadcast over numpy arrays.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike
 
+from slipenv.terramechanics.vectorize import array_law
+
 __all__ = [
+    "janosi_forces",
     "mohr_coulomb_strength_pa",
     "janosi_shear_stress_pa",
     "okello_secant",
@@ -28,9 +37,8 @@ __all__ = [
 
 # Below this argument okello_secant switches from its closed form, which loses ~4 eps/x to
 # cancellation, to the clamped form plus its first-order Taylor correction (error < X^2/24).
-_X_SMALL = np.asarray(1e-5)
-_ONE = np.asarray(1.0)
-_SIXTH = np.asarray(1.0 / 6.0)
+_X_SMALL = 1e-5
+_SIXTH = 1.0 / 6.0
 
 
 def mohr_coulomb_strength_pa(normal_stress_pa: ArrayLike, cohesion_pa: ArrayLike,
@@ -68,18 +76,60 @@ def janosi_shear_stress_pa(shear_displacement_m: ArrayLike, max_shear_stress_pa:
     return -np.sign(j) * np.asarray(max_shear_stress_pa) * np.expm1(-np.abs(j) / shear_modulus_m)
 
 
-def okello_secant(x: ArrayLike) -> np.ndarray:
-    """Secant slope h(x) = g(x)/x = (x - 1 + e^{-x})/x^2 of Okello's normalised curve, x >= 0.
+def _okello_h(x: float) -> float:
+    """h(x) of `okello_secant` for one float x >= 0 (the text the array version is derived from)."""
+    xc = x if x > _X_SMALL else _X_SMALL
+    return (math.expm1(-xc) + xc) / (xc * xc) + (xc - x) * _SIXTH  # h'(0) = -1/6 where clamped
 
-    g(x) = 1 - (1 - e^{-x})/x is the bracket of Lindgren Eq. 18 at x = s/B, so the thrust is
-    F = F_max x h(x). h(0) = 1/2 (the limit of Lindgren Eq. 23); there is no 0/0 anywhere.
-    Relative error below 1e-10 for all x >= 0.
+
+okello_secant = array_law(_okello_h, name="okello_secant", doc="""\
+Secant slope h(x) = g(x)/x = (x - 1 + e^{-x})/x^2 of Okello's normalised curve, x >= 0.
+
+g(x) = 1 - (1 - e^{-x})/x is the bracket of Lindgren Eq. 18 at x = s/B, so the thrust is
+F = F_max x h(x). h(0) = 1/2 (the limit of Lindgren Eq. 23); there is no 0/0 anywhere.
+Relative error below 1e-10 for all x >= 0. Takes and returns arrays (0-d for a scalar).
+""")
+
+
+def janosi_forces(slip: float, tan_beta: float, load_n: float, cohesion_force_n: float,
+                  tan_phi: float, shear_ratio: float) -> tuple[float, float]:
+    """Janosi-Hanamoto shear integrated over a patch, combined slip split by direction [N].
+
+    The soil under the patch is sheared along the slip velocity, so the shear displacement at
+    distance x behind the front edge is x (s, tan_beta), of magnitude x sigma with
+    sigma = sqrt(s^2 + tan^2 beta) (the combined slip of Reina Eq. 7). Isotropic Janosi shear
+    (Lindgren Eq. 2) with the Mohr-Coulomb limit (Eq. 3) integrated over the patch gives the
+    resultant F = F_max g(sigma L/K), g the Okello bracket (Eq. 18-20), against the slip
+    velocity:
+
+        fx = F s/sigma,   fy = -F tan_beta/sigma,   F_max = A c + W tan phi.
+
+    Written as F/sigma = F_max h(x) L/K with x = sigma L/K (`okello_secant`), there is no 0/0
+    at sigma = 0. Pure longitudinal slip reduces exactly to `patch_thrust_n`.
+
+    Parameters
+    ----------
+    slip, tan_beta : float
+        Slip ratio s [-] and tan of the slip angle [-] (convention of `contact`).
+    load_n : float
+        Normal load W [N]; W <= 0 (no contact) gives no force.
+    cohesion_force_n : float
+        A c [N]: contact area times soil cohesion.
+    tan_phi : float
+        tan of the soil's internal friction angle [-].
+    shear_ratio : float
+        L/K = 1/B [-]: shear length over the shear deformation modulus.
+
+    Returns
+    -------
+    fx_n, fy_n : float
+        fx with the sign of s; fy opposing the lateral sliding, sign(fy) = -sign(tan_beta).
     """
-    x = np.asarray(x, dtype=float)
-    xc = np.maximum(x, _X_SMALL)
-    h = (np.expm1(-xc) + xc) / (xc * xc)
-    h += (xc - x) * _SIXTH  # h'(0) = -1/6: first-order correction where x was clamped
-    return h
+    if load_n <= 0.0:
+        return 0.0, 0.0
+    f_max = load_n * tan_phi + cohesion_force_n
+    secant = f_max * _okello_h(math.hypot(slip, tan_beta) * shear_ratio) * shear_ratio
+    return secant * slip, -secant * tan_beta
 
 
 def okello_traction(slip: ArrayLike, amplitude: ArrayLike, shape_b: ArrayLike) -> np.ndarray:

@@ -5,14 +5,20 @@ k_s = T_max/(2B) (Lindgren Eq. 21-24). Slip is measured from an assumed wheel ra
 the true rolling radius R_a differs (it depends on the surface: 0.283/0.287 m on soil, 0.275 m
 on concrete, Lindgren Sec. 3.2) the measured slip s_m is off, and the torque/slip line seen in
 s_m no longer passes through the origin (Eq. 25-31).
+
+`linear_slip_forces` is the combined-slip form of the linear law that the simulation injects, in
+plain floats (called per wheel and per physics substep); the other functions broadcast.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 __all__ = [
+    "linear_slip_forces",
     "linear_torque_nm",
     "slip_from_speeds",
     "actual_slip",
@@ -40,6 +46,40 @@ def linear_torque_nm(slip: ArrayLike, stiffness_nm: ArrayLike,
     """
     t_max = np.asarray(max_torque_nm, dtype=float)
     return np.clip(np.asarray(stiffness_nm) * np.asarray(slip), -t_max, t_max)
+
+
+def linear_slip_forces(slip: float, tan_beta: float, load_n: float, cohesion_force_n: float,
+                       tan_phi: float, shear_ratio: float) -> tuple[float, float]:
+    """Lindgren's linear slip law F = (k_s/r) s, combined slip, capped at Mohr-Coulomb [N].
+
+    k_s = T_max/(2B) (Lindgren Eq. 24) with T_max = r (A c + W tan phi) and B = K/L, so the
+    force stiffness is k_s/r = F_max L/(2K): the initial slope of the Janosi law, which it
+    matches to 2 % while sigma L/K < 0.059 (Eq. 23: relative error ~ s/(3B)). The lateral
+    force uses the same stiffness on tan_beta, and the resultant is capped at F_max:
+
+        (fx, fy) = (s, -tan_beta) F_max min(sigma/(2B), 1)/sigma,  sigma = sqrt(s^2 + tan^2 b).
+
+    Parameters
+    ----------
+    slip, tan_beta : float
+        Slip ratio s [-] and tan of the slip angle [-] (convention of `contact`).
+    load_n : float
+        Normal load W [N]; W <= 0 (no contact) gives no force.
+    cohesion_force_n, tan_phi, shear_ratio : float
+        A c [N], tan phi [-] and L/K = 1/B [-], as in `janosi.janosi_forces`.
+
+    Returns
+    -------
+    fx_n, fy_n : float
+        fx with the sign of s; fy opposing the lateral sliding.
+    """
+    if load_n <= 0.0:
+        return 0.0, 0.0
+    half_ratio = 0.5 * shear_ratio  # 1/(2B)
+    excess = math.hypot(slip, tan_beta) * half_ratio  # sigma/(2B): saturated beyond 1
+    secant = (load_n * tan_phi + cohesion_force_n) * half_ratio / (excess if excess > 1.0
+                                                                     else 1.0)
+    return secant * slip, -secant * tan_beta
 
 
 def slip_from_speeds(ground_speed_mps: ArrayLike, wheel_rate_rad_s: ArrayLike,

@@ -14,88 +14,109 @@ split has no 0/0 at sigma = 0. Sign convention of this package: F_x has the sign
 opposes lateral sliding, F_y = -(tan b/sigma) F_y0(sigma) (Reina's Eq. 9 gives its magnitude).
 Departure from the paper: k_x, k_y are floored at 0, so beyond sigma = mu/A (30 for Table 3,
 far outside the fitted 0-0.8 slip, 5-25 deg) the force stays at 0 instead of changing sign.
+
+`reina_forces` is the law in plain floats, as the simulation calls it per wheel and per substep;
+the array functions `reina_forces_n`, `reina_reference_force_n` and `exp_secant` are derived from
+the same scalar code.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike
 
+from slipenv.terramechanics.vectorize import array_law
+
 __all__ = [
     "exp_secant",
+    "reina_forces",
     "reina_reference_force_n",
     "reina_forces_n",
     "reina_max_longitudinal_force_n",
     "slip_ratio_from_slip_angle",
 ]
 
-_TINY = np.asarray(1e-300)
-_TINY_LOAD_N = 1e-12  # [N] floor of W where it divides (zero load gives zero force)
+_TINY = 1e-300  # below it (1 - e^{-y})/y is 1 to rounding; avoids 0/0
 
 
-def exp_secant(y: ArrayLike) -> np.ndarray:
-    """(1 - e^{-y})/y for y >= 0, equal to 1 at y = 0 (exact to rounding, no 0/0)."""
-    yc = np.maximum(np.asarray(y, dtype=float), _TINY)
-    return -np.expm1(-yc) / yc
+def _exp_secant(y: float) -> float:
+    """(1 - e^{-y})/y for one float y >= 0 (the text `exp_secant` is derived from)."""
+    return -math.expm1(-y) / y if y > _TINY else 1.0
 
 
-def reina_reference_force_n(slip: ArrayLike, load_n: ArrayLike, mu: ArrayLike,
-                            stiffness_n: ArrayLike, high_slip_slope: ArrayLike) -> np.ndarray:
-    """Pure-slip reference force W (mu (1 - e^{-C s/(mu W)}) - A s) [N] (Reina Eq. 5-6).
+exp_secant = array_law(_exp_secant, name="exp_secant", doc="""\
+(1 - e^{-y})/y for y >= 0, equal to 1 at y = 0 (exact to rounding, no 0/0); on arrays.
+""")
 
-    Eq. 5 with (C_x, A_x) and the slip ratio s, or Eq. 6 with (C_y, A_y) and tan(beta). Reina
-    states it for s >= 0; here it is extended as an odd function of s.
+
+def _reference_force_n(slip: float, load_n: float, mu: float, stiffness_n: float,
+                       high_slip_slope: float) -> float:
+    a = abs(slip)
+    return slip * (stiffness_n * _exp_secant(stiffness_n * a / (mu * load_n))
+                   - load_n * high_slip_slope)
+
+
+reina_reference_force_n = array_law(_reference_force_n, name="reina_reference_force_n",
+                                    doc="""\
+Pure-slip reference force W (mu (1 - e^{-C s/(mu W)}) - A s) [N] (Reina Eq. 5-6), on arrays.
+
+Eq. 5 with (C_x, A_x) and the slip ratio s, or Eq. 6 with (C_y, A_y) and tan(beta). Reina
+states it for s >= 0; here it is extended as an odd function of s. Evaluated as s k(|s|) with
+k = C (1 - e^{-y})/y - W A, y = C |s|/(mu W), the form `reina_forces` uses, without its floor.
+
+Parameters
+----------
+slip : array_like
+    s_x [-] (Eq. 5) or tan(beta) [-] (Eq. 6).
+load_n : array_like
+    Vertical wheel load W [N], > 0.
+mu : array_like
+    Maximum soil adhesion coefficient [-].
+stiffness_n : array_like
+    C_x or C_y [N]: slope of the curve at zero slip.
+high_slip_slope : array_like
+    A_x or A_y [-]: slope of the curve at high slip, in units of W.
+""")
+
+
+def reina_forces(slip: float, tan_beta: float, load_n: float, mu: float, c_x_n: float,
+                 c_y_n: float, a_x: float, a_y: float) -> tuple[float, float]:
+    """Combined-slip forces (F_x, F_y) [N] of one wheel, in plain floats (Reina Eq. 5-9).
+
+    The pure-slip curves (Eq. 5-6) at the total slip sigma = sqrt(s^2 + tan^2 beta) (Eq. 7),
+    split by direction (Eq. 8-9), as F_x = s k_x(sigma), F_y = -tan_beta k_y(sigma) with
+    k = C (1 - e^{-y})/y - W A, y = C sigma/(mu W), each k floored at 0 (see the module).
 
     Parameters
     ----------
-    slip : array_like
-        s_x [-] (Eq. 5) or tan(beta) [-] (Eq. 6).
-    load_n : array_like
-        Vertical wheel load W [N], > 0.
-    mu : array_like
-        Maximum soil adhesion coefficient [-].
-    stiffness_n : array_like
-        C_x or C_y [N]: slope of the curve at zero slip.
-    high_slip_slope : array_like
-        A_x or A_y [-]: slope of the curve at high slip, in units of W.
-    """
-    s = np.asarray(slip, dtype=float)
-    w = np.asarray(load_n, dtype=float)
-    a = np.abs(s)
-    mu_w = np.asarray(mu) * w
-    return np.sign(s) * (-mu_w * np.expm1(-np.asarray(stiffness_n) * a / mu_w)
-                         - w * np.asarray(high_slip_slope) * a)
-
-
-def reina_forces_n(slip: ArrayLike, tan_beta: ArrayLike, load_n: ArrayLike, mu: ArrayLike,
-                   c_x_n: ArrayLike, c_y_n: ArrayLike, a_x: ArrayLike,
-                   a_y: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    """Combined-slip forces (F_x, F_y) [N] (Reina Eq. 7-9).
-
-    Parameters
-    ----------
-    slip : array_like
+    slip : float
         Slip ratio s [-] (Reina Eq. 3; > 0 in drive).
-    tan_beta : array_like
+    tan_beta : float
         Tangent of the slip angle, v_lateral/|v_longitudinal| [-] (Reina Eq. 4).
-    load_n : array_like
-        Vertical load W [N]; W <= 0 gives (numerically) zero force.
-    mu, c_x_n, c_y_n, a_x, a_y : array_like
+    load_n : float
+        Vertical load W [N]; W <= 0 (no contact) gives no force.
+    mu, c_x_n, c_y_n, a_x, a_y : float
         Reina Table 3 parameters: mu [-], C_x [N], C_y [N], A_x [-], A_y [-].
 
     Returns
     -------
-    fx_n, fy_n : ndarray
+    fx_n, fy_n : float
         F_x with the sign of s; F_y opposing the lateral sliding, sign(F_y) = -sign(tan beta).
         At tan beta = 0, F_x = F_x0(s) (Eq. 5); at s = 0, -F_y = F_y0(tan beta) (Eq. 6).
     """
-    s = np.asarray(slip, dtype=float)
-    tb = np.asarray(tan_beta, dtype=float)
-    w = np.maximum(np.asarray(load_n, dtype=float), _TINY_LOAD_N)
-    sigma_per_mu_w = np.hypot(s, tb) / (np.asarray(mu) * w)
-    k_x = np.asarray(c_x_n) * exp_secant(c_x_n * sigma_per_mu_w) - w * a_x
-    k_y = np.asarray(c_y_n) * exp_secant(c_y_n * sigma_per_mu_w) - w * a_y
-    return s * np.maximum(k_x, 0.0), -tb * np.maximum(k_y, 0.0)
+    if load_n <= 0.0:
+        return 0.0, 0.0
+    sigma_per_mu_w = math.hypot(slip, tan_beta) / (mu * load_n)
+    k_x = c_x_n * _exp_secant(c_x_n * sigma_per_mu_w) - load_n * a_x
+    k_y = c_y_n * _exp_secant(c_y_n * sigma_per_mu_w) - load_n * a_y
+    return (slip * k_x if k_x > 0.0 else 0.0), (-tan_beta * k_y if k_y > 0.0 else 0.0)
+
+
+reina_forces_n = array_law(reina_forces, n_out=2, name="reina_forces_n", doc="""\
+`reina_forces` (Reina Eq. 5-9) on arrays: arguments broadcast, returns (fx_n, fy_n) arrays.
+""")
 
 
 def reina_max_longitudinal_force_n(tan_beta: ArrayLike, load_n: ArrayLike,

@@ -21,8 +21,7 @@ class SoilParams(NamedTuple):
     """Numeric soil parameters, floats or arrays of shape (n,); fields as in `Soil`.
 
     `deformable` is 1.0 (deformable) or 0.0 (rigid) so that soil maps can blend it. Treat the
-    tuple, and any arrays in it, as immutable: force models cache values derived from it by
-    identity.
+    tuple, and any arrays in it, as immutable: the simulation binds force kernels to it.
     """
 
     cohesion_pa: float | np.ndarray

@@ -234,14 +234,20 @@ class GridSoilMap:
         for extreme in (scale.min(), scale.max()):
             dataclasses.replace(base, **{f: getattr(base, f) * float(extreme) for f in fields})
         grid_map = cls.__new__(cls)
-        grid_map.soils = (base,)
-        grid_map._params = (base.params(),)
-        grid_map._matrix = np.array(grid_map._params, dtype=float)
-        grid_map._scale = grid_map._setup(scale, origin_m, cell_size_m).ravel()
-        mask = np.array([f in fields for f in PARAM_FIELDS], dtype=float).reshape(-1, 1)
-        grid_map._base_column = _column(base.params())
-        grid_map._scaled_column = grid_map._base_column * mask
+        cls._init_scaled(grid_map, base, scale, fields, origin_m, cell_size_m)
         return grid_map
+
+    def _init_scaled(self, base: Soil, scale: np.ndarray, fields: Sequence[str],
+                     origin_m: tuple[float, float],
+                     cell_size_m: float | tuple[float, float]) -> None:
+        """The state of a scaled grid (see `scaled`, which has checked the arguments)."""
+        self.soils = (base,)
+        self._params = (base.params(),)
+        self._matrix = np.array(self._params, dtype=float)
+        self._scale = self._setup(scale, origin_m, cell_size_m).ravel()
+        mask = np.array([f in fields for f in PARAM_FIELDS], dtype=float).reshape(-1, 1)
+        self._base_column = _column(base.params())
+        self._scaled_column = self._base_column * mask
 
     def _setup(self, nodes: np.ndarray, origin_m: tuple[float, float],
                cell_size_m: float | tuple[float, float]) -> np.ndarray:

@@ -15,10 +15,44 @@ VEHICLE_KINDS = ("diff_drive", "skid_steer", "rover4ws")
 WHEEL_ROLES = ("driven", "caster")
 
 
+# Plausible bounds of a ground vehicle, from a toy rover to a large tractor: values outside
+# them are typos or unit mistakes (a 1e9 kg chassis), not vehicles the force laws were fitted
+# for. Each is (low, high), both inclusive, in the field's unit.
+BOUNDS: dict[str, tuple[float, float]] = {
+    "chassis_mass_kg": (0.1, 1e5),  # 100 g toy to 100 t
+    "wheel_mass_kg": (1e-3, 1e4),
+    "wheel_radius_m": (5e-3, 2.0),  # 5 mm to the largest tyres (about 2 m)
+    "wheel_width_m": (1e-3, 2.0),
+    "contact_length_m": (1e-3, 5.0),
+    "chassis_dimension_m": (1e-2, 20.0),
+    "chassis_center_height_m": (-10.0, 10.0),
+    "wheel_offset_m": (-20.0, 20.0),  # wheel centre coordinates in the chassis frame
+    "track_width_m": (1e-2, 10.0),
+    "wheelbase_m": (1e-2, 20.0),
+    "track_length_m": (1e-2, 20.0),
+    "max_wheel_speed_rad_s": (1e-3, 1000.0),
+    "max_wheel_torque_nm": (1e-3, 1e5),
+    "max_speed_mps": (1e-3, 50.0),
+    "max_yaw_rate_rad_s": (1e-3, 20.0),
+    "counts_per_rad": (1e-3, 1e7),
+    "contact_sinkage_m": (1e-6, 0.5),
+}
+
+
 def _check_positive(owner: str, **values: float) -> None:
     for name, value in values.items():
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
+        if not (isinstance(value, (int, float)) and not isinstance(value, bool)
+                and math.isfinite(value) and value > 0.0):
             raise ValueError(f"{owner}.{name} must be a finite number > 0, got {value!r}")
+
+
+def _check_range(owner: str, name: str, value: float, bound: str | None = None) -> None:
+    """``value`` must be a finite number within ``BOUNDS[bound or name]``."""
+    low, high = BOUNDS[bound or name]
+    if not (isinstance(value, (int, float)) and not isinstance(value, bool)
+            and math.isfinite(value) and low <= value <= high):
+        raise ValueError(f"{owner}.{name} must be a finite number in [{low:g}, {high:g}] "
+                         f"(plausible for a ground vehicle), got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -83,6 +117,17 @@ class WheelSpec:
             raise ValueError(f"{owner}: a driven wheel needs a drive channel")
         if len(self.position_m) != 3 or not all(math.isfinite(v) for v in self.position_m):
             raise ValueError(f"{owner}.position_m must be three finite numbers")
+        for name, value, bound in (
+            ("radius_m", self.radius_m, "wheel_radius_m"),
+            ("width_m", self.width_m, "wheel_width_m"),
+            ("mass_kg", self.mass_kg, "wheel_mass_kg"),
+            ("contact_length_m", self.contact_length_m, None),
+            *((f"position_m[{i}]", v, "wheel_offset_m") for i, v in enumerate(self.position_m)),
+        ):
+            _check_range(owner, name, value, bound)
+        for name in ("soil_rolling_radius_m", "rolling_radius_m"):
+            if getattr(self, name) is not None:
+                _check_range(owner, name, getattr(self, name), "wheel_radius_m")
         if self.soil_rolling_radius_m is not None:
             _check_positive(owner, soil_rolling_radius_m=self.soil_rolling_radius_m)
         if self.rolling_radius_m is not None:
@@ -139,6 +184,12 @@ class VehicleSpec:
         contact leaves them statically indeterminate, with two or three carrying everything).
     assumed : tuple[str, ...]
         Fields whose values the source paper leaves out and that are assumed here.
+
+    Notes
+    -----
+    Every number must lie within :data:`BOUNDS` (a toy rover to a 100 t tractor: chassis
+    0.1 kg-100 t, wheel radius 5 mm-2 m, torque <= 1e5 N m per wheel, speed <= 50 m/s, ...);
+    anything else is a ``ValueError`` naming the field.
     """
 
     name: str
@@ -180,6 +231,19 @@ class VehicleSpec:
         )
         size = dict(zip(("length", "width", "height"), self.chassis_size_m, strict=True))
         _check_positive(owner, **{f"chassis_{k}_m": v for k, v in size.items()})
+        for name in ("chassis_mass_kg", "chassis_center_height_m", "track_width_m",
+                     "max_wheel_speed_rad_s", "max_wheel_torque_nm", "max_speed_mps",
+                     "max_yaw_rate_rad_s", "counts_per_rad", "contact_sinkage_m"):
+            _check_range(owner, name, getattr(self, name))
+        _check_range(owner, "wheel_radius_nominal_m", self.wheel_radius_nominal_m,
+                     "wheel_radius_m")
+        for k, v in size.items():
+            _check_range(owner, f"chassis_size_m ({k})", v, "chassis_dimension_m")
+        for name in ("wheelbase_m", "track_length_m"):
+            if getattr(self, name) is not None:
+                _check_range(owner, name, getattr(self, name))
+        if not self.wheels or not self.channels:
+            raise ValueError(f"{owner}: a vehicle needs wheels and drive channels")
         names = [w.name for w in self.wheels]
         if len(set(names)) != len(names):
             raise ValueError(f"{owner}: wheel names must be unique, got {names}")

@@ -12,7 +12,7 @@ SHORT = {"max_episode_s": 6.0}
 
 
 def test_a_zero_residual_drives_exactly_like_the_baseline():
-    from slipenv.run import baseline_controller
+    from slipenv.controllers.baseline import baseline_controller
 
     wrapped = make_env(ENV, residual=True, **SHORT)
     plain = make_env(ENV, **SHORT)
@@ -38,7 +38,7 @@ def test_the_residual_scale_must_be_a_fraction():
 def test_baseline_and_a_trained_agent_are_evaluated_by_the_same_code(tmp_path):
     model = train(ENV, total_timesteps=512, n_envs=2, seed=0, residual=True,
                   out=str(tmp_path / "ppo"), **SHORT)
-    assert (tmp_path / "ppo.zip").exists()
+    assert (tmp_path / "ppo" / "model.zip").exists()  # OUT is now a run folder
     agent = evaluate(model, ENV, n_episodes=1, residual=True, **SHORT)
     baseline = evaluate("baseline", ENV, n_episodes=1, **SHORT)
     for result in (agent, baseline):

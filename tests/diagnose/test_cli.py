@@ -42,7 +42,7 @@ def test_writes_json_matching_the_schema_and_a_report(synth_log_dir, tmp_path, c
 
 
 def test_model_from_the_report_loads_into_the_simulation(synth_log_dir, tmp_path):
-    from slipenv.diagnose.extension import apply_model
+    from slipenv.diagnose import apply_model
     from slipenv.envs.config import SlipEnvConfig
 
     out = tmp_path / "d.json"

@@ -1,4 +1,5 @@
-"""``apply_model``: a fitted extension becomes the simulated world (gymnasium.make(model=...))."""
+"""``apply_model``: a fitted extension becomes the simulated world
+(``gymnasium.make(id, config=apply_model(config, report))``, ``make_env(id, report)``)."""
 
 from __future__ import annotations
 
@@ -9,8 +10,11 @@ import numpy as np
 import pytest
 
 import slipenv  # noqa: F401  (registers the envs)
-from slipenv.diagnose.extension import ScaledSlip, apply_model, parse_model
+from slipenv.diagnose import apply_model, make_env
+from slipenv.diagnose.extension import parse_model
+from slipenv.diagnose.slip_law import ScaledSlip
 from slipenv.envs.config import SlipEnvConfig
+from slipenv.envs.registration import preset_config
 from slipenv.terramechanics.soil_map import PatchSoilMap
 
 FARM = dict(vehicle="farm_2wd", soil="concrete", force_model="linear", path="circle",
@@ -21,6 +25,12 @@ def make(**kw):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return gym.make("slipenv/Configurable-v0", **{**FARM, **kw})
+
+
+def make_extended(model):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return make_env("slipenv/Configurable-v0", model, **FARM)
 
 
 def travelled(env, steps=40) -> tuple[float, float]:
@@ -39,12 +49,15 @@ def travelled(env, steps=40) -> tuple[float, float]:
 def test_make_with_model_changes_the_world():
     model = {"rolling_radius": {"radius_left_m": 0.30, "radius_right_m": 0.30},
              "gyro_bias": {"gyro_bias_rad_s": 0.02}}
-    plain, extended = make(), make(model=model)
+    plain, extended = make(), make_extended(model)
     try:
         u = extended.unwrapped
         assert [w.rolling_radius_m for w in u.vehicle.wheels][:2] == [0.30, 0.30]
         assert u.config.sensor_noise.gyro_bias_rad_s == 0.02
-        assert u.config.model is None  # applied once
+        # applied once, by apply_model: the env takes the config as it is
+        cfg = apply_model(SlipEnvConfig.from_kwargs(preset_config("slipenv/Configurable-v0"),
+                                                    **FARM), model)
+        assert u.config == cfg
         d0, a0 = travelled(plain)
         d1, a1 = travelled(extended)
         # metres per radian follow the rolling radius: 0.275 m nominal, 0.30 m extended
@@ -93,9 +106,55 @@ def test_bad_models_are_clear_errors(model, message):
         parse_model(model)
 
 
-def test_unknown_model_kwarg_in_make_is_an_error():
+def test_unknown_effect_in_make_env_is_an_error():
     with pytest.raises(ValueError, match="unknown effect"):
-        make(model={"slope": {}})
+        make_extended({"slope": {}})
+
+
+def test_config_from_apply_model_goes_through_gymnasium_make():
+    report = {"cause": "track_width", "also": [], "vehicle_kind": "diff_drive",
+              "wheels": ["left", "right"], "nominal": {"track_width_m": 1.6},
+              "parameters": {"track_width_m": [1.76, 0.01]}}
+    cfg = apply_model(preset_config("slipenv/FarmField-v0"), report)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = gym.make("slipenv/FarmField-v0", config=cfg)
+    try:  # 10 % wider than the log's nominal width: 10 % wider than the farm vehicle's
+        assert env.unwrapped.vehicle.track_width_m == pytest.approx(1.6 * 1.1)
+        assert preset_config("slipenv/FarmField-v0").vehicle == "farm_2wd"  # preset untouched
+    finally:
+        env.close()
+
+
+HUSKY_REPORT = {"format": "slipenv-diagnosis/1", "cause": "rolling_radius", "also": [],
+                "vehicle_kind": "skid_steer", "wheels": ["left", "right"],
+                "nominal": {"wheel_radius_m": 0.165, "track_width_m": 0.555},
+                "parameters": {"radius_left_m": [0.17, 1e-4], "radius_right_m": [0.17, 1e-4]}}
+
+
+def test_report_of_another_vehicle_kind_is_refused():
+    farm = preset_config("slipenv/FarmField-v0")
+    with pytest.raises(ValueError, match=r"skid_steer.*farm_2wd.*diff_drive"):
+        apply_model(farm, HUSKY_REPORT)
+    # the same report fits a skid-steer vehicle with left/right drive channels
+    cfg = apply_model(SlipEnvConfig(vehicle="husky"), HUSKY_REPORT)
+    assert {w.rolling_radius_m for w in cfg.vehicle.wheels if w.role == "driven"} != {None}
+
+
+@pytest.mark.parametrize("model", [
+    {"cause": "rolling_radius", "also": [], "vehicle_kind": "diff_drive",
+     "wheels": ["wheel_l", "wheel_r"],
+     "parameters": {"radius_wheel_l_m": [0.28, 1e-4], "radius_wheel_r_m": [0.28, 1e-4]}},
+    {"rolling_radius": {"radius_front_left_m": 0.28, "radius_front_right_m": 0.28}},
+], ids=["report", "plain"])
+def test_report_with_other_wheel_names_is_refused(model):
+    with pytest.raises(ValueError, match=r"wheels \[.*\].*farm_2wd.*wheels \['left', 'right'\]"):
+        apply_model(SlipEnvConfig(**FARM), model)
+
+
+def test_make_env_checks_the_vehicle_of_the_preset():
+    with pytest.raises(ValueError, match="skid_steer"):
+        make_env("slipenv/FarmField-v0", HUSKY_REPORT)
 
 
 def test_none_model_changes_nothing():

@@ -92,9 +92,10 @@ def test_fit_recovers_geometry_on_exact_data(radii, width):
     log = kinematic_log(wl, wr, r_true=radii, w_true=width)
     problem = Problem.from_segments(replay.build_segments([log]))
     f = fit(problem, ("rolling_radius", "track_width"))
-    assert [f.params["r_L"], f.params["r_R"], f.params["W"]] == \
+    radius, track = f.params["rolling_radius"], f.params["track_width"]
+    assert [radius.left_m, radius.right_m, track.width_m] == \
         pytest.approx([*radii, width], rel=2e-4)
-    assert all(v > 0 for v in f.se.values())
+    assert all(v > 0 for per_effect in f.se.values() for v in per_effect.values())
 
 
 def test_gyro_bias_fit():
@@ -102,19 +103,23 @@ def test_gyro_bias_fit():
     log = kinematic_log(wl, wr, gyro_bias=0.01)
     problem = Problem.from_segments(replay.build_segments([log]))
     f = fit(problem, ("gyro_bias",))
-    assert f.params["gyro_b"] == pytest.approx(0.01, abs=3 * f.se["gyro_b"] + 1e-4)
+    se = f.se["gyro_bias"]["bias_rad_s"]
+    assert f.params["gyro_bias"].bias_rad_s == pytest.approx(0.01, abs=3 * se + 1e-4)
 
 
 def test_contract_names_round_trip():
     wheels, sides = ["left", "right"], np.array([0, 1])
-    values = {"r_L": 0.28, "r_R": 0.29, "c_L": 1e-3, "c_R": 2e-3}
-    se = dict.fromkeys(values, 1e-5)
-    out = effect("rolling_radius").to_contract(values, se, wheels, sides)
+    radius = effect("rolling_radius").params(0.28, 0.29)
+    out = effect("rolling_radius").to_contract(
+        radius, {"left_m": 1e-5, "right_m": 1e-5}, wheels, sides)
     assert out == {"radius_left_m": [0.28, 1e-5], "radius_right_m": [0.29, 1e-5]}
-    ks = effect("torque_slip").to_contract(values, se, wheels, sides)
+    torque = effect("torque_slip")
+    ks = torque.to_contract(torque.params(1e-3, 2e-3), dict.fromkeys(torque.fields(), 1e-5),
+                            wheels, sides)
     assert ks["k_s_left_nm"][0] == pytest.approx(1000.0)
-    back = effect("torque_slip").from_contract({k: v[0] for k, v in ks.items()}, wheels, sides)
-    assert back == pytest.approx({"c_L": 1e-3, "c_R": 2e-3})
+    back = torque.from_contract({k: v[0] for k, v in ks.items()}, wheels, sides)
+    assert [back.compliance_left_per_nm, back.compliance_right_per_nm] == \
+        pytest.approx([1e-3, 2e-3])
     for eff in EFFECTS.values():
         assert eff.contract_names(wheels)
 
@@ -160,5 +165,5 @@ def test_combined_slip_named_on_a_kinematic_log():
     sel = select(Problem.from_segments(replay.build_segments([log])))
     assert {sel.cause, *sel.also} == {"slope_side_slip", "combined_slip"}
     p = sel.fits["pose"].params
-    assert p["bpr"] == pytest.approx(-0.4, abs=0.05)
-    assert p["kb"] == pytest.approx(0.8, rel=0.25)
+    assert p["slope_side_slip"].beta_per_roll == pytest.approx(-0.4, abs=0.05)
+    assert p["combined_slip"].k_beta == pytest.approx(0.8, rel=0.25)

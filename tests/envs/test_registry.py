@@ -104,7 +104,7 @@ def test_rgb_array_render_returns_an_image():
         env.reset(seed=0)
         env.step(ACTION)
         frame = env.render()
-        assert frame.shape == (240, 320, 3) and frame.dtype == np.uint8
+        assert frame.shape == (480, 640, 3) and frame.dtype == np.uint8
         assert frame.std() > 5  # not a blank image
     finally:
         env.close()

@@ -17,7 +17,7 @@ from slipenv.controllers.yamauchi import YamauchiController
 import slipenv  # noqa: F401
 from slipenv.contracts.observation import OBS_SLIP_ANGLE
 from slipenv.envs.registration import yamauchi_observation
-from slipenv.experiments.yamauchi_runs import Settings, circle_episode
+from slipenv.experiments.yamauchi import Settings, circle_episode
 from slipenv.run import baseline_controller
 
 ENV_ID = "slipenv/TrackedSlopeCircle-v0"

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from slipenv.estimators.base import OdometryGeometry
-from slipenv.estimators.endo import endo_slip_velocities
-from slipenv.estimators.identification import SlipRun, true_slips
-from slipenv.estimators.yamauchi import rotation_radius_m
+from slipenv.estimators.skid_steer.endo import endo_slip_velocities
+from slipenv.estimators.skid_steer.identification import SlipRun, true_slips
+from slipenv.estimators.skid_steer.yamauchi import rotation_radius_m
 
 from slipenv.contracts.frame import SensorFrame
 

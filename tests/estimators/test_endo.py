@@ -6,15 +6,15 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from slipenv.estimators.base import OdometryGeometry
-from slipenv.estimators.endo import (
+from slipenv.estimators.gyrodometry import Gyrodometry
+from slipenv.estimators.skid_steer.endo import (
     EndoOdometry,
     endo_left_share,
     endo_ratio,
     endo_slip_ratios,
     endo_slip_velocities,
 )
-from slipenv.estimators.gyrodometry import Gyrodometry
-from slipenv.estimators.skid_steer import body_velocity
+from slipenv.estimators.skid_steer.kinematics import body_velocity
 
 from tests.estimators import skid_steer_synth as synth
 

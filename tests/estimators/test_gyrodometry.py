@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from slipenv.estimators.base import Estimator, OdometryGeometry
 from slipenv.estimators.dead_reckoning import DeadReckoning
-from slipenv.estimators.endo import EndoOdometry
 from slipenv.estimators.gyrodometry import Gyrodometry
+from slipenv.estimators.skid_steer.endo import EndoOdometry
 
 from tests.estimators import skid_steer_synth as synth
 

@@ -4,7 +4,7 @@ import json
 
 import numpy as np
 import pytest
-from slipenv.estimators.identification import (
+from slipenv.estimators.skid_steer.identification import (
     SlipAngleModel,
     evaluate,
     evaluate_runs,
@@ -14,7 +14,7 @@ from slipenv.estimators.identification import (
     train_test_split_runs,
     true_slips,
 )
-from slipenv.estimators.skid_steer import body_velocity
+from slipenv.estimators.skid_steer.kinematics import body_velocity
 
 from tests.estimators import skid_steer_synth as synth
 

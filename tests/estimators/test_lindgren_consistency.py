@@ -8,7 +8,6 @@ import math
 
 import numpy as np
 import pytest
-from slipenv.estimators import lindgren_models as lm
 from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.consistency import (
     chi2_mean_band,
@@ -16,11 +15,13 @@ from slipenv.estimators.consistency import (
     nis,
     stack_innovations,
 )
-from slipenv.estimators.lindgren_ekf import SENSORS, LindgrenEKF, LindgrenNoise, OracleSoil
-from slipenv.estimators.lindgren_synth import simulate, straight_and_turn
+from slipenv.estimators.lindgren import models as lm
+from slipenv.estimators.lindgren.ekf import SENSORS, LindgrenEKF, LindgrenNoise, OracleSoil
 
+from slipenv.contracts import wrap_angles
 from slipenv.contracts.frame import SensorFrame
 from slipenv.sensors.beacons import BeaconScanner, default_beacons_xy
+from tests.estimators.lindgren_synth import simulate, straight_and_turn
 
 GEOM = OdometryGeometry(wheel_radius_m=0.275, track_width_m=1.5, counts_per_rad=285.0)
 TRUE_SOIL = OracleSoil(wheel_radius_m=(0.283, 0.287), k_s=(2500.0, 2200.0))  # Lindgren §3.2
@@ -74,7 +75,7 @@ def test_nees_and_nis_in_chi2_bands_on_the_filters_own_model() -> None:
         for k in range(1, n_steps + 1):
             ekf.update(run.frames[k])
             err = run.truth[k] - ekf.x
-            err[lm.ITH] = lm.wrap_angles(err[lm.ITH])
+            err[lm.ITH] = wrap_angles(err[lm.ITH])
             ne[m, k - 1] = err @ np.linalg.solve(ekf.P, err)
         for s in SENSORS:
             pooled[s].append(nis(*stack_innovations(ekf.history[s])[1:]))

@@ -10,20 +10,20 @@ import math
 import numpy as np
 import pytest
 from filterpy.kalman import ExtendedKalmanFilter
-from slipenv.estimators import lindgren_models as lm
-from slipenv.estimators import lindgren_observations as lo
 from slipenv.estimators.base import Estimator, OdometryGeometry
-from slipenv.estimators.lindgren_ekf import (
+from slipenv.estimators.lindgren import models as lm
+from slipenv.estimators.lindgren import observations as lo
+from slipenv.estimators.lindgren.ekf import (
     LindgrenEKF,
     LindgrenNoise,
     OracleSoil,
     Scheme,
     parse_scheme,
 )
-from slipenv.estimators.lindgren_synth import simulate, straight_and_turn
 
 from slipenv.contracts.frame import SensorFrame
 from slipenv.sensors.beacons import BeaconScanner, default_beacons_xy
+from tests.estimators.lindgren_synth import simulate, straight_and_turn
 
 GEOM = OdometryGeometry(wheel_radius_m=0.275, track_width_m=1.5, counts_per_rad=285.0)
 CROSS = np.array([[10.0, 0.0], [0.0, 10.0], [-10.0, 0.0], [0.0, -10.0]])
@@ -145,7 +145,7 @@ def test_association_picks_the_beacon_and_gates_an_outlier(
     good = math.pi / 2 + 0.005  # beacon (0, 10), 5 mrad off
     outlier = math.pi / 4  # halfway between two beacons: no beacon is near
     a, b = fresh(), fresh()
-    with caplog.at_level(logging.WARNING, logger="estimators.lindgren_ekf"):
+    with caplog.at_level(logging.WARNING, logger="slipenv.estimators.lindgren.ekf"):
         a.update(frame(0.05, beacon_bearings_rad=np.array([outlier, good]),
                        beacon_times_s=np.array([0.05, 0.03])))
     assert "bearing_gated" not in caplog.text  # gating is routine: counted, not warned about
@@ -220,7 +220,7 @@ def test_nan_optional_sensors_are_counted_and_logged(caplog: pytest.LogCaptureFi
     f = dataclasses.replace(
         f, gyro_z_rad_s=math.nan, acc_x_mps2=math.nan, wheel_torque_nm=np.array([1.0, np.nan]),
         beacon_bearings_rad=np.array([0.1, math.nan]), beacon_times_s=np.array([0.02, 0.03]))
-    with caplog.at_level(logging.WARNING, logger="estimators.lindgren_ekf"):
+    with caplog.at_level(logging.WARNING, logger="slipenv.estimators.lindgren.ekf"):
         est = ekf.update(f)
     assert est.extras["skipped"] == {"gyro_nan": 1, "acc_nan": 1, "torque_nan": 1,
                                      "bearing_nan": 1}

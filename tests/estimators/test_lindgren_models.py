@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 from filterpy.common import Q_continuous_white_noise
-from slipenv.estimators import lindgren_models as lm
-from slipenv.estimators import lindgren_observations as lo
-from slipenv.estimators.lindgren_models import OracleSoil
+from slipenv.estimators.lindgren import models as lm
+from slipenv.estimators.lindgren import observations as lo
+from slipenv.estimators.lindgren.models import OracleSoil
 
 W = 1.5  # track width [m] (assumed vehicle)
 CPR = 285.0  # counts/rad (Lindgren)

@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from slipenv.estimators.skid_steer import (
+from slipenv.estimators.skid_steer.kinematics import (
     body_velocity,
     slips_from_body_velocity,
     track_ground_speeds,

@@ -6,10 +6,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from slipenv.estimators.base import Estimator
-from slipenv.estimators.endo import EndoOdometry
 from slipenv.estimators.gyrodometry import Gyrodometry
-from slipenv.estimators.identification import SlipAngleModel, fit_endo_n, fit_slip_angle_runs
-from slipenv.estimators.yamauchi import (
+from slipenv.estimators.skid_steer.endo import EndoOdometry
+from slipenv.estimators.skid_steer.identification import (
+    SlipAngleModel,
+    fit_endo_n,
+    fit_slip_angle_runs,
+)
+from slipenv.estimators.skid_steer.yamauchi import (
     SlipCompensatedOdometry,
     next_angular_displacement,
     rotation_radius_m,

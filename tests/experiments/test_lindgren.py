@@ -9,12 +9,12 @@ import math
 import numpy as np
 import pytest
 from slipenv.estimators.base import OdometryGeometry
-from slipenv.estimators.lindgren_ekf import LindgrenEKF, LindgrenNoise, Scheme
+from slipenv.estimators.lindgren.ekf import LindgrenEKF, LindgrenNoise, Scheme
 
 from slipenv.contracts.frame import SensorFrame
 from slipenv.experiments import experiment, lindgren
-from slipenv.experiments import lindgren_report as report
-from slipenv.experiments.lindgren_report import finite
+from slipenv.experiments.lindgren import report
+from slipenv.experiments.lindgren.report import finite
 from slipenv.paths import path_by_name
 
 REQUIRED = {
@@ -30,7 +30,7 @@ def quick(tmp_path_factory) -> tuple[dict, dict, object]:
     """The quick experiment, seed 0, as the CLI runs it (about 35 s on 2 cores)."""
     out = tmp_path_factory.mktemp("lindgren")
     result = experiment("lindgren")(quick=True, out_dir=str(out), json_path=str(out / "r.json"),
-                                    seed=0, progress=False)
+                                    seed=0, progress=False, docs_dir=str(out / "docs"))
     return result, json.loads((out / "r.json").read_text()), out
 
 
@@ -78,6 +78,19 @@ def test_truth_side_metrics_and_plots(quick) -> None:
     assert len(drives["scheme4"]) == lindgren.QUICK.dropout_drives
     for name in ("paths.png", "dropout.png", "autocorrelation.png"):
         assert (out / name).stat().st_size > 10_000
+
+
+def test_the_results_page_holds_the_command_the_table_and_the_figures(quick) -> None:
+    result, _, out = quick
+    page = (out / "docs" / "lindgren.md").read_text()
+    assert f"`slipenv reproduce lindgren --quick --seed 0 --docs {out / 'docs'}`" in page
+    assert "| mean deviation from scheme 1 [m], scheme3 | 0.243 |" in page  # Table 1
+    slip = result["metrics"]["dropout_final_error_m"]["slip_model"]
+    assert f"| final position error [m], slip_model | 0.21 | {slip:.4g} |" in page
+    for name in ("paths", "dropout", "autocorrelation"):
+        assert f"(img/lindgren/{name}.png)" in page
+        assert (out / "docs" / "img" / "lindgren" / f"{name}.png").stat().st_size > 10_000
+    assert "{" not in page  # every placeholder filled
 
 
 @pytest.fixture(scope="module")

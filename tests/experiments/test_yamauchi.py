@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from slipenv.estimators.identification import SlipAngleModel
+from slipenv.estimators.skid_steer.identification import SlipAngleModel
 
 from slipenv.cli import main
 from slipenv.envs.registration import yamauchi_observation
@@ -23,7 +23,7 @@ def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("yamauchi")
     path = out / "metrics.json"
     assert main(["reproduce", "yamauchi", "--quick", "--quiet", "--json", str(path),
-                 "--out", str(out)]) == 0
+                 "--out", str(out), "--docs", str(out / "docs")]) == 0
     return json.loads(path.read_text()), out
 
 
@@ -99,6 +99,21 @@ def test_figures_and_the_fitted_model_are_saved(quick):
     saved = json.loads((out / "slip_model.json").read_text())
     model = SlipAngleModel.from_dict(saved["beta_model"])
     assert len(model.coef) == 4 and saved["n"] > 0.0
+
+
+def test_the_results_page_holds_the_command_the_table_the_limits_and_the_figures(quick):
+    result, out = quick
+    page = (out / "docs" / "yamauchi.md").read_text()
+    assert f"`slipenv reproduce yamauchi --quick --seed 0 --docs {out / 'docs'}`" in page
+    n15 = result["metrics"]["endo_n"]["15"]
+    assert f"| Endo n, tilt 15° [95 % CI] | 0.824 | {n15:.3f} [" in page  # §2.4
+    ratio = result["metrics"]["limits"]["odometry_ratio_to_gyrodometry"]
+    assert f"| limit: slip-compensated with the true β, RMSE / gyrodometry | - | " \
+           f"{ratio['slip_compensated_true_beta']:.2f}" in page
+    for name in ("fig4_endo_n", "fig5_slip_angle", "fig6_odometry", "fig8_circle"):
+        assert f"(img/yamauchi/{name}.png)" in page
+        assert (out / "docs" / "img" / "yamauchi" / f"{name}.png").is_file()
+    assert "{" not in page
 
 
 def test_the_shipped_model_is_what_the_tracked_env_observes():

@@ -103,3 +103,32 @@ def test_recorder_errors():
         rec.to_log()
     with pytest.raises(ValueError, match="exactly one"):
         export_episode(None)
+
+
+def test_the_export_recorder_rides_along_any_rollout():
+    from slipenv.logs.export import ExportRecorder
+    from slipenv.rollout import TrajectoryRecorder, rollout
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = gym.make("slipenv/HuskySand-v0")
+    export, traj = ExportRecorder(columns=["cmd"], seed=2), TrajectoryRecorder()
+    try:
+        result = rollout(env, lambda obs: np.array([0.4, -0.2], dtype=np.float32), seed=2,
+                         max_steps=12, recorders=[export, traj])
+    finally:
+        env.close()
+    log, path = export.to_log(), traj.trajectory()
+    assert result.steps == 12 and len(log) == 13 and len(path) == 12  # + the reset sample
+    np.testing.assert_array_equal(log.signals["gt_x"][1:], path.true_pose[:, 0])
+    np.testing.assert_array_equal(log.t[1:], path.t_s)
+    assert log.meta.data["simulation"]["seed"] == 2
+    # the commands are the action through the nominal kinematics: a right turn at 0.4 v_max
+    assert np.all(log.signals["cmd_left"][1:] > log.signals["cmd_right"][1:])
+
+
+def test_an_unknown_column_group_fails_before_the_episode_runs():
+    from slipenv.logs.export import ExportRecorder
+
+    with pytest.raises(ValueError, match="unknown column group"):
+        ExportRecorder(columns=["lidar"])

@@ -110,3 +110,15 @@ def test_registry_builds_every_path_and_lists_names_for_unknown_ones():
         5.0, 1.0).end_pose()
     with pytest.raises(ValueError, match="known paths: circle, field_rows"):
         path_by_name("spiral")
+
+
+@pytest.mark.parametrize(("name", "kwargs", "option"), [
+    ("slalom", {"n_gates": 10**6}, "n_gates"),
+    ("slalom", {"n_gates": 2.5}, "n_gates"),
+    ("lindgren_straights", {"n_legs": 10**5}, "n_legs"),
+    ("field_rows", {"n_rows": True}, "n_rows"),
+])
+def test_a_count_beyond_a_thousand_or_not_an_integer_is_refused_promptly(name, kwargs, option):
+    # 10**6 gates would build 2 million splines before answering.
+    with pytest.raises(ValueError, match=option):
+        path_by_name(name, **kwargs)

@@ -110,3 +110,30 @@ def test_first_call_starts_and_bad_input_raises() -> None:
         BeaconScanner(np.zeros((3, 3)))
     with pytest.raises(ValueError, match="scan_rate_hz"):
         BeaconScanner(scan_rate_hz=0.0)
+
+
+@pytest.mark.parametrize("bad", ["yes", [[1.0, 2.0, 3.0]], np.zeros((0, 2)),
+                                 [[np.nan, 0.0]], [["a", "b"]], {"x": 1}, [[1e9, 0.0]]])
+def test_bad_beacon_positions_are_a_value_error_naming_them(bad) -> None:
+    from slipenv.sensors.beacons import as_beacons_xy
+
+    with pytest.raises(ValueError, match="beacons"):
+        as_beacons_xy(bad)
+
+
+def test_an_integer_beacon_array_is_the_documented_form() -> None:
+    from slipenv.sensors.beacons import as_beacons_xy
+
+    xy = as_beacons_xy(np.array([[5, 5], [-5, 5], [0, -5]]))
+    assert xy.dtype == float and xy.shape == (3, 2)
+
+
+@pytest.mark.parametrize(("field", "value"), [
+    ("gyro_var_rad2_s2", 1e6), ("torque_scale", 1e9), ("compass_std_rad", -1.0),
+    ("acc_x_var_g2", float("nan")), ("torque_rel_std", "5%"), ("incl_std_rad", True),
+])
+def test_implausible_sensor_noise_is_a_value_error_naming_the_field(field, value) -> None:
+    from slipenv.sensors.noise import SensorNoise
+
+    with pytest.raises(ValueError, match=field):
+        SensorNoise(**{field: value})

@@ -46,7 +46,7 @@ def test_brakes_cannot_hold_beyond_the_mohr_coulomb_limit(make_sim):
     end = np.array(hold(sim, 5.0).position_m)
     assert end[0] - start[0] < -1e-3  # sliding downhill (-x)
     contact = sim.injector.contact_state()
-    soil = sim.injector._soil_rows[0]
+    soil = sim.injector.soil_at_wheel(0)
     geometry = sim.injector.force_model.geometry
     area = geometry.width_m * geometry.contact_length_m
     limit = soil.cohesion_pa * area + contact.load_n[:2] * math.tan(soil.friction_angle_rad)
@@ -108,7 +108,7 @@ def test_on_soft_soil_slip_grows_with_drawbar_load_and_follows_t_equals_ks_s(
                 sim._substep()
             truth = sim.truth()
         contact = sim.injector.contact_state()
-        soil = sim.injector._soil_rows[driven[0]]
+        soil = sim.injector.soil_at_wheel(driven[0])
         f, _ = law(contact.slip, np.zeros(sim.injector.n), contact.load_n, soil)
         for c, channel in enumerate(sim.spec.channels):
             members = [k for k in driven if sim.spec.wheels[k].channel == channel]

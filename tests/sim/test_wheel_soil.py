@@ -62,3 +62,25 @@ def test_a_wheel_spinning_up_on_soft_soil_settles_smoothly_to_full_slip():
         assert np.all(np.diff(slips) >= -1e-9)  # monotone, no oscillation
     finally:
         rig.close()
+
+
+def test_the_injector_reports_the_soil_and_rolling_radius_under_each_wheel():
+    geometry = ContactGeometry(radius_m=RADIUS_M, width_m=WIDTH_M, contact_length_m=CONTACT_M)
+    soil = soil_by_name("loose_sand")
+    rig = SingleWheelRig(force_model_by_name("janosi", geometry), UniformSoil(soil))
+    try:
+        assert rig.injector.soil_at_wheel(0) == soil.params()
+        assert rig.injector.rolling_radius_m(0) == pytest.approx(
+            RADIUS_M * soil.rolling_radius_scale, rel=1e-15)
+    finally:
+        rig.close()
+
+
+@pytest.mark.parametrize("option", ["dt_s", "min_relaxation_m", "resistance_speed_mps",
+                                    "low_speed_mps", "damping_speed_mps", "damping_ratio"])
+def test_injector_options_out_of_range_raise_naming_the_option(option):
+    from slipenv.sim.wheel_soil import WheelSoilInjector
+
+    kwargs = {"dt_s": 1.0 / 240.0, option: -1.0}
+    with pytest.raises(ValueError, match=option):
+        WheelSoilInjector(0, None, None, 0, None, None, **kwargs)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pybullet as p
 import pytest
 
@@ -49,3 +50,34 @@ def test_mounds_match_the_pybullet_heightfield(client):
 def test_bad_terrain_is_a_value_error(bad):
     with pytest.raises(ValueError):
         TerrainSpec(**bad)
+
+
+@pytest.mark.parametrize(("bad", "name"), [
+    (dict(kind="mounds", clear_radius_m=100.0), "clear_radius_m"),
+    (dict(kind="mounds", clear_radius_m=14.0), "clear_radius_m"),  # feasible corner, no room
+    (dict(kind="mounds", mound_radius_m=10.0), "mound_radius_m"),
+    (dict(kind="mounds", size_m=0.5), "size_m"),
+    (dict(kind="mounds", resolution_m=1e-4), "resolution_m"),
+    (dict(kind="mounds", mound_count=2.5), "mound_count"),
+    (dict(kind="mounds", mound_count=10**6), "mound_count"),
+    (dict(kind="slope", downhill_azimuth_deg=float("nan")), "downhill_azimuth_deg"),
+    (dict(kind="slope", slope_deg="5"), "slope_deg"),
+    (dict(kind="mound"), "did you mean 'mounds'"),
+])
+def test_an_impossible_terrain_fails_promptly_naming_the_option(bad, name):
+    import time
+
+    start = time.monotonic()
+    with pytest.raises(ValueError, match=name):
+        TerrainSpec(**bad)
+    assert time.monotonic() - start < 1.0  # the mound draw is bounded: no hang
+
+
+def test_the_mound_layout_is_cached_and_unchanged_by_the_bounded_draw():
+    from slipenv.terrain.terrain import _mound_centres
+
+    spec = TerrainSpec(kind="mounds", mound_count=30, mound_radius_m=0.4, size_m=14.0,
+                       clear_radius_m=0.6)
+    centres = _mound_centres(spec)
+    assert centres.shape == (30, 2) and _mound_centres(spec) is centres
+    assert np.all(np.hypot(*centres.T) > 0.6 + 0.8)

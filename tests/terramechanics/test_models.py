@@ -19,10 +19,17 @@ from slipenv.terramechanics import (
     ReinaForceModel,
     SoilParams,
     force_model_by_name,
+    wheel_kernel,
 )
 from slipenv.terramechanics.bekker import compaction_resistance_n, wheel_sinkage_m
-from slipenv.terramechanics.janosi import max_thrust_n, patch_thrust_n, small_slip_stiffness
-from slipenv.terramechanics.reina import reina_forces_n
+from slipenv.terramechanics.janosi import (
+    janosi_forces,
+    max_thrust_n,
+    patch_thrust_n,
+    small_slip_stiffness,
+)
+from slipenv.terramechanics.lindgren import linear_slip_forces
+from slipenv.terramechanics.reina import reina_forces, reina_forces_n
 
 WHEEL = ContactGeometry(radius_m=0.092, width_m=0.11, contact_length_m=0.06)
 SAND = LOOSE_SAND.params()
@@ -240,3 +247,51 @@ def test_changing_soil_object_is_never_served_from_a_stale_cache(model):
 def test_repr_names_the_class_and_its_settings():
     assert repr(ReinaForceModel(WHEEL)).startswith("ReinaForceModel(ContactGeometry(")
     assert "scale_stiffness_with_load=True" in repr(ReinaForceModel(WHEEL))
+
+
+class _ArrayOnlyModel:
+    """A user ForceModel without the ``scalar_kernel`` hook (plain arrays)."""
+
+    def __call__(self, slip, tan_beta, load_n, soil):
+        return 2.0 * np.asarray(slip) * load_n, -np.asarray(tan_beta) * load_n
+
+    def resistance_n(self, load_n, soil):
+        return 0.1 * np.asarray(load_n)
+
+
+def test_wheel_kernel_uses_the_models_own_scalar_kernel(model):
+    kernel = wheel_kernel(model, SAND)
+    assert kernel(0.2, -0.1, 90.0) == model.scalar_kernel(SAND)(0.2, -0.1, 90.0)
+    fx, fy = model(np.array([0.2]), np.array([-0.1]), np.array([90.0]), SAND)
+    res = model.resistance_n(np.array([90.0]), SAND)
+    assert kernel(0.2, -0.1, 90.0) == (fx[0], fy[0], res[0])
+
+
+def test_wheel_kernel_wraps_a_model_without_the_hook():
+    fx, fy, res = wheel_kernel(_ArrayOnlyModel(), SAND)(0.25, 0.5, 40.0)
+    assert (fx, fy, res) == (20.0, -20.0, 4.0)
+    assert all(type(v) is float for v in (fx, fy, res))
+
+
+@pytest.mark.parametrize("law", [janosi_forces, linear_slip_forces])
+def test_patch_laws_give_no_force_without_contact(law):
+    assert law(0.3, 0.2, 0.0, 15.0, 0.6, 2.0) == (0.0, 0.0)
+    assert law(0.3, 0.2, -4.0, 15.0, 0.6, 2.0) == (0.0, 0.0)
+
+
+def test_reina_law_gives_no_force_without_contact_in_both_forms():
+    assert reina_forces(0.3, 0.2, 0.0, 0.6, 55.0, 200.0, 0.02, 0.04) == (0.0, 0.0)
+    for scaled in (True, False):
+        m = ReinaForceModel(WHEEL, scale_stiffness_with_load=scaled)
+        fx, fy = m(np.array([0.3]), np.array([0.2]), np.array([-1.0]), SAND)
+        assert fx[0] == 0.0 and fy[0] == 0.0
+
+
+def test_reina_load_scaling_is_load_times_the_law_at_unit_load_with_c_over_w_ref():
+    p = LUNAR_SIMULANT.params()
+    kernel = ReinaForceModel(WHEEL).scalar_kernel(p)
+    for s, tb, w in [(0.2, 0.1, 40.0), (-0.5, 0.3, 700.0), (0.0, -0.2, 3.0)]:
+        fx1, fy1 = reina_forces(s, tb, 1.0, p.mu, p.c_x_n / p.reference_load_n,
+                                p.c_y_n / p.reference_load_n, p.a_x, p.a_y)
+        fx, fy, _ = kernel(s, tb, w)
+        assert (fx, fy) == (fx1 * w, fy1 * w)

@@ -1,4 +1,4 @@
-"""The per-wheel float fast path equals the vectorised force laws to 1e-12."""
+"""The per-wheel float kernel and the array interface derived from it agree to 1e-12."""
 
 from __future__ import annotations
 

@@ -65,3 +65,24 @@ def test_a_driven_wheel_without_channel_or_an_unknown_channel_is_rejected():
     wheel = dataclasses.replace(spec.wheels[0], channel="middle")
     with pytest.raises(ValueError, match="unknown channel"):
         dataclasses.replace(spec, wheels=(wheel, *spec.wheels[1:]))
+
+
+@pytest.mark.parametrize(("field", "value"), [
+    ("chassis_mass_kg", 1e9), ("chassis_mass_kg", 1e-6), ("max_wheel_torque_nm", 1e12),
+    ("max_speed_mps", 1e4), ("track_width_m", 1e9), ("counts_per_rad", float("nan")),
+    ("chassis_mass_kg", True),
+])
+def test_a_physically_implausible_vehicle_is_a_value_error_naming_the_field(field, value):
+    import dataclasses
+
+    from slipenv.vehicles.presets import husky
+
+    with pytest.raises(ValueError, match=field):
+        dataclasses.replace(husky(), **{field: value})
+
+
+def test_every_preset_lies_within_the_plausible_bounds():
+    from slipenv.vehicles.presets import VEHICLES
+
+    for build in VEHICLES.values():
+        build()  # validated on construction

@@ -1,0 +1,238 @@
+"""State layout and process model of Lindgren's navigation EKF, as plain functions.
+
+Every function takes the state vector ``x`` first and returns a prediction or its Jacobian, so
+the filter (:mod:`slipenv.estimators.lindgren.ekf`), the synthetic data generator
+(:mod:`tests.estimators.lindgren_synth`) and the tests share one copy of the maths (Lindgren, Hague,
+Probert Smith and Marchant, "Relating torque and slip in an odometric model for an autonomous
+agricultural vehicle", Eq. 12-13 and §4). The observation models (Eq. 14-17, 37-41) are in
+:mod:`slipenv.estimators.lindgren.observations`.
+
+State (Lindgren Eq. 12, extended for the slip-aware model of §4)::
+
+    index  symbol  unit      meaning
+    0      x       m         position, world x
+    1      y       m         position, world y
+    2      θ       rad       heading, counter-clockwise from world x
+    3      v       m/s       forward speed
+    4      Ω       rad/s     yaw rate
+    5      v̇       m/s²      forward acceleration
+    6      Ω̇       rad/s²    yaw acceleration
+    7      α1      rad       pitch, nose UP positive (Lindgren's sign; SensorFrame pitch is -α1)
+    8      α2      rad       roll, RIGHT side up positive (SensorFrame roll is -α2)
+    9      R_wl    m         effective rolling radius, left wheel      } slip-aware
+    10     R_wr    m         effective rolling radius, right wheel     } model only
+    11     k_sl    T units   torque/slip gradient, left  (T = k_s s)   } (13 states)
+    12     k_sr    T units   torque/slip gradient, right               }
+
+The signs of α1 and α2 are the ones that make Eq. 14 hold for a specific-force accelerometer:
+nose-up pitch adds +g α1 to the forward reading, right-side-up roll adds -g α2 to the
+lateral (leftward) reading. ``k_s`` is in whatever unit the torque sensor reports: torque only
+ever enters as the ratio ``T / k_s``, so an uncalibrated torque scale is absorbed by ``k_s``
+(Lindgren §3.2: "the units of T and T_max are unimportant").
+
+Departures from the paper, each for a stated reason:
+
+* Eq. 13 is an Euler step. :func:`process_fx` integrates the same continuous model (constant
+  v̇ and Ω̇ over τ) to second order: the filter also predicts over the short, irregular
+  intervals between asynchronous bearings, and the Euler heading lag τΩ/2 biases the position
+  sideways by v τ Ω / 2 every step (6 mm per metre on Lindgren's 4 m circles at 20 Hz). To
+  first order in τ the two are identical.
+* The paper's pitch-rate input u = α̇1 comes from a pitch gyro that ``SensorFrame`` does not
+  carry, so pitch and roll are random walks here, turned into each other through the heading
+  change as the vehicle yaws on a tilted plane (the coupling the paper applies to α2, here as
+  an exact rotation so that it stays bounded at any yaw rate), and observed by the
+  inclinometer when the frame has one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+G_MPS2 = 9.80665  # standard gravity [m/s²]; Eq. 14 accelerations are in units of g
+
+IX, IY, ITH, IV, IOM, IVD, IOMD, IA1, IA2 = range(9)
+IRL, IRR, IKL, IKR = 9, 10, 11, 12
+N_BASE = 9  # the paper's state, Eq. 12
+N_SLIP = 13  # plus R_w and k_s per wheel, §4
+STATE_NAMES = ("x", "y", "theta", "v", "omega", "v_dot", "omega_dot", "alpha1", "alpha2",
+               "R_wl", "R_wr", "k_sl", "k_sr")
+
+
+@dataclass(frozen=True)
+class OracleSoil:
+    """The true soil parameters, for the oracle filter that knows them (the limit to compare to).
+
+    Attributes
+    ----------
+    wheel_radius_m : tuple[float, float]
+        True effective rolling radius (left, right) [m] (Lindgren: 0.283, 0.287 on soil).
+    k_s : tuple[float, float]
+        True torque/slip gradient (left, right) in the torque sensor's unit (Eq. 24).
+    """
+
+    wheel_radius_m: tuple[float, float]
+    k_s: tuple[float, float]
+
+    def __post_init__(self) -> None:
+        for name in ("wheel_radius_m", "k_s"):
+            value = tuple(float(v) for v in getattr(self, name))
+            if len(value) != 2 or not all(math.isfinite(v) and v > 0.0 for v in value):
+                raise ValueError(f"OracleSoil.{name} must be two finite values > 0, got {value!r}")
+            object.__setattr__(self, name, value)
+
+
+# ---------------------------------------------------------------------------------------------
+# Process model (Eq. 13) and process noise
+# ---------------------------------------------------------------------------------------------
+def process_fx(x: np.ndarray, tau: float) -> np.ndarray:
+    """Predict the state τ seconds ahead (Lindgren Eq. 13, second-order integration).
+
+    Parameters
+    ----------
+    x : np.ndarray, shape (n,), n = 9 or 13
+        State at the start of the interval (layout in the module docstring).
+    tau : float
+        Prediction interval [s].
+
+    Returns
+    -------
+    np.ndarray, shape (n,)
+        State at the end of the interval. θ is not wrapped (the filter wraps it), so the
+        function stays smooth for finite differences. R_w and k_s are constant.
+    """
+    xp = x.copy()
+    v_bar = x[IV] + 0.5 * tau * x[IVD]  # mean speed over the interval [m/s]
+    dth = tau * (x[IOM] + 0.5 * tau * x[IOMD])  # heading change [rad]
+    th_mid = x[ITH] + 0.5 * dth
+    xp[IX] = x[IX] + tau * v_bar * math.cos(th_mid)
+    xp[IY] = x[IY] + tau * v_bar * math.sin(th_mid)
+    xp[ITH] = x[ITH] + dth
+    xp[IV] = x[IV] + tau * x[IVD]
+    xp[IOM] = x[IOM] + tau * x[IOMD]
+    # a fixed ground tilt seen from a yawing body: (α1, α2) turn through the heading change
+    c, s = math.cos(dth), math.sin(dth)
+    xp[IA1] = c * x[IA1] - s * x[IA2]
+    xp[IA2] = s * x[IA1] + c * x[IA2]
+    return xp
+
+
+def process_F(x: np.ndarray, tau: float) -> np.ndarray:
+    """Jacobian ``F = ∂f/∂x`` of :func:`process_fx` (Lindgren Eq. 7), shape (n, n)."""
+    n = x.shape[0]
+    F = np.eye(n)
+    v_bar = x[IV] + 0.5 * tau * x[IVD]
+    dth = tau * (x[IOM] + 0.5 * tau * x[IOMD])
+    th_mid = x[ITH] + 0.5 * dth
+    c, s = math.cos(th_mid), math.sin(th_mid)
+    # x' = x + τ v̄ cos θm with v̄ = v + τ v̇/2, θm = θ + τ Ω/2 + τ² Ω̇/4
+    F[IX, ITH] = -tau * v_bar * s
+    F[IX, IV] = tau * c
+    F[IX, IVD] = 0.5 * tau * tau * c
+    F[IX, IOM] = -tau * v_bar * s * 0.5 * tau
+    F[IX, IOMD] = -tau * v_bar * s * 0.25 * tau * tau
+    F[IY, ITH] = tau * v_bar * c
+    F[IY, IV] = tau * s
+    F[IY, IVD] = 0.5 * tau * tau * s
+    F[IY, IOM] = tau * v_bar * c * 0.5 * tau
+    F[IY, IOMD] = tau * v_bar * c * 0.25 * tau * tau
+    F[ITH, IOM] = tau
+    F[ITH, IOMD] = 0.5 * tau * tau
+    F[IV, IVD] = tau
+    F[IOM, IOMD] = tau
+    cd, sd = math.cos(dth), math.sin(dth)
+    F[IA1, IA1], F[IA1, IA2], F[IA2, IA1], F[IA2, IA2] = cd, -sd, sd, cd
+    da1 = -sd * x[IA1] - cd * x[IA2]  # ∂α1'/∂(Δθ)
+    da2 = cd * x[IA1] - sd * x[IA2]  # ∂α2'/∂(Δθ)
+    F[IA1, IOM], F[IA1, IOMD] = tau * da1, 0.5 * tau * tau * da1
+    F[IA2, IOM], F[IA2, IOMD] = tau * da2, 0.5 * tau * tau * da2
+    return F
+
+
+_YAW_CHAIN = np.ix_((ITH, IOM, IOMD), (ITH, IOM, IOMD))  # the (θ, Ω, Ω̇) block of Q
+
+
+def jerk_block(tau: float, psd: float) -> np.ndarray:
+    """Discretised continuous white-jerk noise for a (position, rate, acceleration) chain.
+
+    Equals ``filterpy.common.Q_continuous_white_noise(3, tau, psd)`` (tested), written out
+    because it is called at every prediction.
+
+    Parameters
+    ----------
+    tau : float
+        Interval [s].
+    psd : float
+        Jerk power spectral density [unit²/s⁵].
+
+    Returns
+    -------
+    np.ndarray, shape (3, 3)
+    """
+    t2 = tau * tau
+    t3 = t2 * tau
+    return psd * np.array([[t3 * t2 / 20.0, t2 * t2 / 8.0, t3 / 6.0],
+                           [t2 * t2 / 8.0, t3 / 3.0, t2 / 2.0],
+                           [t3 / 6.0, t2 / 2.0, tau]])
+
+
+def process_Q(
+    x: np.ndarray,
+    tau: float,
+    jerk_psd_v: float,
+    jerk_psd_omega: float,
+    tilt_psd: float,
+    radius_var_per_m: float = 0.0,
+    k_s_rel_var_per_m: float = 0.0,
+) -> np.ndarray:
+    """Process noise covariance ``Q`` over τ (Lindgren Eq. 7 and the end of §4).
+
+    White jerk drives the (along-track distance, v, v̇) and (θ, Ω, Ω̇) chains; the distance
+    noise is laid along the mean heading in (x, y). Pitch and roll are random walks. For the
+    13-state model the variances of R_w and k_s grow in proportion to the distance travelled
+    in the interval, ``d = |v + τ v̇/2| τ`` (Lindgren §4: "increasing their corresponding
+    variances ... in proportion to the distance travelled"); k_s's growth is relative to its
+    current estimate so that it does not depend on the torque sensor's scale.
+
+    Parameters
+    ----------
+    x : np.ndarray, shape (n,)
+        State at the start of the interval.
+    tau : float
+        Interval [s].
+    jerk_psd_v : float
+        Forward jerk spectral density [m²/s⁵].
+    jerk_psd_omega : float
+        Yaw jerk spectral density [rad²/s⁵].
+    tilt_psd : float
+        Pitch and roll random-walk spectral density [rad²/s].
+    radius_var_per_m : float
+        Growth of each R_w variance per metre travelled [m²/m].
+    k_s_rel_var_per_m : float
+        Growth of each k_s variance per metre travelled, relative to k_s² [1/m].
+
+    Returns
+    -------
+    np.ndarray, shape (n, n)
+    """
+    n = x.shape[0]
+    Q = np.zeros((n, n))
+    v_bar = x[IV] + 0.5 * tau * x[IVD]
+    th_mid = x[ITH] + 0.5 * tau * (x[IOM] + 0.5 * tau * x[IOMD])
+    u = np.array([math.cos(th_mid), math.sin(th_mid)])
+    qv = jerk_block(tau, jerk_psd_v)
+    # along-track chain: (s, v, v̇) with s laid along u in (x, y)
+    Q[0:2, 0:2] = qv[0, 0] * np.outer(u, u)
+    Q[0:2, IV] = Q[IV, 0:2] = qv[0, 1] * u
+    Q[0:2, IVD] = Q[IVD, 0:2] = qv[0, 2] * u
+    Q[IV, IV], Q[IV, IVD], Q[IVD, IV], Q[IVD, IVD] = qv[1, 1], qv[1, 2], qv[2, 1], qv[2, 2]
+    Q[_YAW_CHAIN] = jerk_block(tau, jerk_psd_omega)
+    Q[IA1, IA1] = Q[IA2, IA2] = tilt_psd * tau
+    if n == N_SLIP:
+        d = abs(v_bar) * tau
+        Q[IRL, IRL] = Q[IRR, IRR] = radius_var_per_m * d
+        Q[IKL, IKL] = k_s_rel_var_per_m * d * x[IKL] ** 2
+        Q[IKR, IKR] = k_s_rel_var_per_m * d * x[IKR] ** 2
+    return Q

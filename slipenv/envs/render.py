@@ -1,0 +1,119 @@
+"""The ``rgb_array`` frame: a top-down map a person can read, drawn straight into an array.
+
+PyBullet's TinyRenderer does not show debug lines, and a chase-camera image of a vehicle on
+uniform soil says little about path following. The frame is a north-up map instead: soil
+background with a 1 m grid, the reference path, the vehicle's true trace, the estimator's
+trace, and the vehicle's chassis outline at its true pose. Pure numpy: no display and no
+plotting library needed.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+FRAME_HW = (480, 640)  # frame height, width [px]
+BACKGROUND = (200, 182, 148)  # soil
+GRID = (184, 166, 132)
+PATH_RGB = (30, 80, 220)  # blue: the reference path
+TRUE_RGB = (210, 30, 30)  # red: where the vehicle really went
+ESTIMATE_RGB = (240, 150, 0)  # orange: where the estimator thinks it went
+VEHICLE_RGB = (20, 20, 20)
+MARGIN_M = 1.0  # [m] around the path in view
+
+
+class MapView:
+    """World (x east, y north) [m] to pixel (row, column) for a fixed extent."""
+
+    def __init__(self, xy_extent: np.ndarray, frame_hw: tuple[int, int] = FRAME_HW) -> None:
+        h, w = frame_hw
+        lo = xy_extent.min(axis=0) - MARGIN_M
+        hi = xy_extent.max(axis=0) + MARGIN_M
+        self.scale = min((w - 1) / (hi[0] - lo[0]), (h - 1) / (hi[1] - lo[1]))  # [px/m]
+        centre = 0.5 * (lo + hi)
+        self.origin = centre - 0.5 * np.array([w - 1, h - 1]) / self.scale
+        self.hw = (h, w)
+
+    def to_px(self, xy: np.ndarray) -> np.ndarray:
+        """Pixel (column, row) of world points, shape (n, 2), as floats."""
+        col = (xy[:, 0] - self.origin[0]) * self.scale
+        row = (self.hw[0] - 1) - (xy[:, 1] - self.origin[1]) * self.scale
+        return np.stack([col, row], axis=1)
+
+
+def blank_frame(view: MapView) -> np.ndarray:
+    """Soil background with grid lines every metre."""
+    h, w = view.hw
+    frame = np.empty((h, w, 3), dtype=np.uint8)
+    frame[:] = BACKGROUND
+    x0, y0 = view.origin
+    x1, y1 = x0 + (w - 1) / view.scale, y0 + (h - 1) / view.scale
+    if view.scale >= 4.0:  # grid lines closer than 4 px would only darken the frame
+        for gx in np.arange(math.ceil(x0), math.floor(x1) + 1):
+            col = int(round((gx - x0) * view.scale))
+            frame[:, col] = GRID
+        for gy in np.arange(math.ceil(y0), math.floor(y1) + 1):
+            row = int(round((h - 1) - (gy - y0) * view.scale))
+            frame[row, :] = GRID
+    return frame
+
+
+def draw_polyline(frame: np.ndarray, px: np.ndarray, rgb, width_px: int = 2) -> None:
+    """Draw the polyline through pixel points ``px`` (n, 2) with square pens of ``width_px``."""
+    if len(px) == 0:
+        return
+    if len(px) == 1:
+        pts = px
+    else:
+        seg = np.diff(px, axis=0)
+        steps = np.maximum(np.ceil(np.abs(seg).max(axis=1) * 2.0), 1).astype(int)
+        steps = np.minimum(steps, 4000)  # a wild point off screen must not cost millions
+        t = np.concatenate([np.arange(k) / k for k in steps])
+        start = np.repeat(px[:-1], steps, axis=0)
+        pts = np.concatenate([start + np.repeat(seg, steps, axis=0) * t[:, None], px[-1:]])
+    h, w = frame.shape[:2]
+    cols = np.round(pts[:, 0]).astype(int)
+    rows = np.round(pts[:, 1]).astype(int)
+    half = width_px // 2
+    for dr in range(-half, width_px - half):
+        for dc in range(-half, width_px - half):
+            r, c = rows + dr, cols + dc
+            ok = (r >= 0) & (r < h) & (c >= 0) & (c < w)
+            frame[r[ok], c[ok]] = rgb
+
+
+def chassis_outline(x: float, y: float, yaw: float, length_m: float,
+                    width_m: float) -> np.ndarray:
+    """Closed outline of the chassis footprint plus a nose tick, world points (6, 2) [m]."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    local = np.array([[-0.5, -0.5], [0.5, -0.5], [0.75, 0.0], [0.5, 0.5], [-0.5, 0.5],
+                      [-0.5, -0.5]]) * np.array([length_m, width_m])
+    rot = np.array([[c, -s], [s, c]])
+    return local @ rot.T + np.array([x, y])
+
+
+def render_map(path_xy: np.ndarray, true_xy: np.ndarray, estimate_xy: np.ndarray,
+               pose: tuple[float, float, float], chassis_lw_m: tuple[float, float],
+               frame_hw: tuple[int, int] = FRAME_HW) -> np.ndarray:
+    """The frame: (H, W, 3) uint8, north up, the whole path in view.
+
+    Parameters
+    ----------
+    path_xy, true_xy, estimate_xy : np.ndarray, shape (n, 2)
+        Reference path samples, true trace and estimated trace [m].
+    pose : tuple
+        True (x [m], y [m], yaw [rad]) of the vehicle now.
+    chassis_lw_m : tuple
+        Chassis length and width [m].
+    """
+    x, y, yaw = pose
+    extent = np.concatenate([path_xy, np.array([[x, y]])])
+    view = MapView(extent, frame_hw)
+    frame = blank_frame(view)
+    draw_polyline(frame, view.to_px(path_xy), PATH_RGB, 3)
+    draw_polyline(frame, view.to_px(estimate_xy), ESTIMATE_RGB, 2)
+    draw_polyline(frame, view.to_px(true_xy), TRUE_RGB, 2)
+    outline = chassis_outline(x, y, yaw, *chassis_lw_m)
+    draw_polyline(frame, view.to_px(outline), VEHICLE_RGB, 2)
+    return frame

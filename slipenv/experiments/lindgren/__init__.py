@@ -1,0 +1,42 @@
+"""Lindgren et al. §5 re-run in simulation (``slipenv reproduce lindgren``, issue #3).
+
+Lindgren, Hague, Probert Smith and Marchant, "Relating torque and slip in an odometric model
+for an autonomous agricultural vehicle": a 2WD farm vehicle's navigation EKF with a linear
+torque/slip law (Eq. 24) in the odometric observation (Eq. 32-41), judged by four sensor
+schemes on 4 m circles (Tables 1-3, Fig. 4-6) and by the final error after a laser cut on
+straights with 180° turns (Fig. 7).
+
+Each drive of ``slipenv/FarmField-v0`` records its raw sensor frames (:mod:`.recording`), and
+the EKF schemes run offline over the same frames (:mod:`.filters`), as in the paper; the
+statistics are in :mod:`.metrics`, the paper's numbers in :mod:`.paper`, the settings and
+why they have their values in :mod:`.settings`. :func:`run` (:mod:`.experiment`) prints the
+paper-vs-simulation table (:mod:`.report`), saves the figures (:mod:`.plots`), the JSON and,
+with ``docs_dir``, the results page (:mod:`.docs`, ``docs/reproductions/lindgren.md``), where
+the measured numbers and the discussion of what differs from the paper live.
+"""
+
+from .experiment import run
+from .filters import FilterRun, pose_errors, run_filter
+from .metrics import circles_metrics, dropout_experiment
+from .paper import PAPER
+from .recording import FrameRecorder, Recording, record
+from .settings import FIELD_NOISE, FILTER, FULL, QUICK, VARIANTS, Config
+
+__all__ = [
+    "FIELD_NOISE",
+    "FILTER",
+    "FULL",
+    "PAPER",
+    "QUICK",
+    "VARIANTS",
+    "Config",
+    "FilterRun",
+    "FrameRecorder",
+    "Recording",
+    "circles_metrics",
+    "dropout_experiment",
+    "pose_errors",
+    "record",
+    "run",
+    "run_filter",
+]

@@ -1,0 +1,98 @@
+"""The statistics of the two experiments: Tables 1-3 on the circles, Fig. 7 on the straights.
+
+(a) Circles (Lindgren Fig. 3-6): over the clockwise arc at constant speed, after the first
+``SETTLE_M`` metres, the mean deviation from scheme 1 (Table 1) and, as only a simulation can,
+the true mean error, RMSE and pose NEES; the time-averaged NIS of the odometric innovations
+(Eq. 43) with its 95 % band, exact and by Eq. 44 (Table 3); the autocorrelation ρ̄(l) of
+Eq. 42 for l = 1..``LAGS``, its mean, variance and share inside ±1.96/√K (Table 2, Fig. 6).
+
+(b) Straights (Fig. 7): laser and odometers only, bearings removed after ``CUT_S``; the final
+position error of scheme 3 (no slip model), scheme 4 (slip model) and the oracle, averaged
+over several drives because one drive's final error is dominated by a random walk of the
+heading.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from slipenv.estimators.consistency import chi2_mean_band, consistency_report, nees
+from slipenv.paths import Path
+
+from ..progress import iterate
+from .filters import FilterRun, pose_errors, run_filter, soil_estimate
+from .recording import Recording, record
+from .settings import CUT_S, DROPOUT_FILTERS, LAGS, SETTLE_M, VARIANTS
+
+
+def circles_metrics(rec: Recording, runs: dict[str, FilterRun]) -> tuple[dict, dict]:
+    """Tables 1-3 on the clockwise arc; returns (metrics, autocorrelation series for Fig. 6)."""
+    cw_end = rec.path.segments[0].length_m
+    w = (rec.s_true_m >= SETTLE_M) & (rec.s_true_m < cw_end)
+    t0, t1 = rec.t_s[w][0], rec.t_s[w][-1]
+    out: dict = {k: {} for k in ("mean_deviation_m", "true_error_mean_m", "true_rmse_m",
+                                 "nees_pose", "nis", "autocorr_mean", "autocorr_var",
+                                 "autocorr_share_inside", "n_samples", "bearings_gated")}
+    rho = {}
+    for name, run in runs.items():
+        err, err3 = pose_errors(run, rec.truth)
+        out["mean_deviation_m"][name] = float(np.mean(np.hypot(
+            *(run.est[w, :2] - runs["scheme1"].est[w, :2]).T)))
+        out["true_error_mean_m"][name] = float(np.mean(err[w]))
+        out["true_rmse_m"][name] = float(np.sqrt(np.mean(err[w] ** 2)))
+        out["nees_pose"][name] = float(np.mean(nees(err3[w], run.P[w])))
+        out["bearings_gated"][name] = int(run.ekf.skipped.get("bearing_gated", 0))
+        odo = [r for r in run.ekf.history["odo"] if t0 <= r[0] <= t1]
+        if not odo:  # scheme 1 has no odometry
+            continue
+        rep = consistency_report(odo, name, lags=range(1, LAGS + 1))
+        out["nis"][name] = rep.nis_mean
+        out["autocorr_mean"][name] = rep.rho_mean
+        out["autocorr_var"][name] = rep.rho_var
+        out["autocorr_share_inside"][name] = rep.rho_share_inside
+        out["n_samples"][name] = rep.n_samples
+        rho[name] = (rep.lags, rep.rho, 1.96 / math.sqrt(rep.n_samples))
+    del out["mean_deviation_m"]["scheme1"]
+    k4 = out["n_samples"]["scheme4"]
+    out["nis"]["band"] = list(chi2_mean_band(k4, 2, 0.05, "exact"))
+    out["nis"]["band_wilson_hilferty"] = list(chi2_mean_band(k4, 2, 0.05, "wilson_hilferty"))
+    # NEES samples are correlated in time: this band is what independent samples would give
+    out["nees_pose"]["band_if_independent"] = list(chi2_mean_band(int(w.sum()), 3))
+    out["soil_estimate_scheme4"] = soil_estimate(runs["scheme4"])
+    out["soil_true"] = {"R_w_m": list(rec.oracle.wheel_radius_m), "k_s": list(rec.oracle.k_s)}
+    out["window_s"] = [float(t0), float(t1)]
+    return out, rho
+
+
+def dropout_experiment(path: Path, seeds: list[int], progress: bool = False) -> tuple:
+    """Fig. 7 on one drive per seed: laser + odometry, bearings removed after ``CUT_S``.
+
+    Returns (metrics, the first drive's Recording, its FilterRuns). The metrics average the
+    final errors of schemes 3, 4 and the oracle over the drives and list each one; the
+    :data:`~.settings.VARIANTS`, whose effects are large, run on the first drive only.
+    """
+    per_run: dict[str, list] = {k: [] for k in DROPOUT_FILTERS}
+    heading: dict[str, list] = {k: [] for k in DROPOUT_FILTERS}
+    first = None
+    for seed in iterate(seeds, progress, "dropout drives"):
+        rec = record(path, seed, progress)
+        names = DROPOUT_FILTERS + (tuple(VARIANTS) if first is None else ())
+        runs = {name: run_filter(rec, name, cut_s=CUT_S, inertial=False) for name in names}
+        errors = {name: pose_errors(r, rec.truth) for name, r in runs.items()}
+        first = first or (rec, runs, errors)
+        for name in DROPOUT_FILTERS:
+            per_run[name].append(float(errors[name][0][-1]))
+            heading[name].append(float(np.degrees(abs(errors[name][1][-1, 2]))))
+    rec, runs, errors = first
+    metrics = {"final_error_m": {k: float(np.mean(v)) for k, v in per_run.items()},
+               "final_error_m_per_drive": per_run,
+               "final_heading_error_deg": {k: float(np.mean(v)) for k, v in heading.items()},
+               "first_drive_final_error_m": {k: float(e[0][-1]) for k, e in errors.items()},
+               "first_drive_soil_estimate": {k: soil_estimate(runs[k]) for k in runs
+                                             if "4" in k},
+               "soil_true": {"R_w_m": list(rec.oracle.wheel_radius_m),
+                             "k_s": list(rec.oracle.k_s)},
+               "seeds": list(seeds), "duration_s": float(rec.t_s[-1]), "cut_s": CUT_S}
+    return metrics, rec, runs

@@ -1,0 +1,124 @@
+"""Driving the farm vehicle once and recording everything the offline filters need.
+
+Like the paper (Lindgren §5: "the raw sensor data ... run through four different EKF
+schemes"), a drive records the raw sensor frames; the filters run over them afterwards
+(:mod:`.filters`). The drive is one :func:`slipenv.rollout.rollout` with a
+:class:`FrameRecorder`, steered by the env's baseline path follower on the env's own EKF.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import gymnasium as gym
+import numpy as np
+
+from slipenv.contracts.frame import SensorFrame
+from slipenv.controllers.baseline import baseline_controller
+from slipenv.envs.estimation import default_k_s_prior, odometry_geometry
+from slipenv.estimators.base import OdometryGeometry
+from slipenv.estimators.lindgren import LindgrenEKF, LindgrenNoise, OracleSoil
+from slipenv.paths import Path
+from slipenv.rollout import rollout
+
+from ..progress import step_bar
+from .settings import ENV_ID, FILTER, STEER_SCHEME
+
+
+@dataclass
+class Recording:
+    """One drive: every SensorFrame, the truth, and what the filters may be told.
+
+    Attributes
+    ----------
+    path : Path
+        The commanded path.
+    frames : list of SensorFrame
+        The reset's frame, then one per env step.
+    t_s : np.ndarray, shape (K,)
+        Frame times [s].
+    truth : np.ndarray, shape (K, 3)
+        True (x [m], y [m], yaw [rad]) of the reference point.
+    s_true_m : np.ndarray, shape (K,)
+        True progress along the path [m].
+    oracle : OracleSoil
+        True R_w and k_s (privileged, for the oracle filter only).
+    params : LindgrenNoise
+        The filters' parameters: :data:`~.settings.FILTER` and the k_s prior.
+    geometry : OdometryGeometry
+    beacons_xy : np.ndarray, shape (n_beacons, 2)
+        Beacon positions [m].
+    """
+
+    path: Path
+    frames: list[SensorFrame]
+    t_s: np.ndarray
+    truth: np.ndarray
+    s_true_m: np.ndarray
+    oracle: OracleSoil
+    params: LindgrenNoise
+    geometry: OdometryGeometry
+    beacons_xy: np.ndarray
+
+
+class FrameRecorder:
+    """A rollout recorder keeping each step's sensor frame, true pose and true progress [m].
+
+    A step without a sensor frame (the env ends an episode on a physics blow-up without
+    one) is an error: the offline filters need every frame.
+    """
+
+    def __init__(self) -> None:
+        self.frames: list[SensorFrame] = []
+        self.truth: list = []
+        self.s_true_m: list[float] = []
+        self._length_m = 0.0
+
+    def on_reset(self, env: gym.Env, obs: np.ndarray, info: dict) -> None:
+        self._length_m = env.unwrapped.path.length_m
+        self.frames, self.truth, self.s_true_m = [info["sensors"]], [info["true_pose"]], [0.0]
+
+    def on_step(self, env: gym.Env, action: np.ndarray, obs: np.ndarray, reward: float,
+                terminated: bool, truncated: bool, info: dict) -> None:
+        if "sensors" not in info:  # physics blow-up: nothing recorded this step
+            raise RuntimeError(f"drive on {env.unwrapped.path.name} ended: "
+                               f"{info.get('truncation_reason')}")
+        self.frames.append(info["sensors"])
+        self.truth.append(info["true_pose"])
+        self.s_true_m.append(info["progress_true"] * self._length_m)
+
+
+@contextlib.contextmanager
+def quiet_estimator() -> Iterator[None]:
+    """Silence the EKF's first-skip warnings (the skips are counted and reported instead)."""
+    log = logging.getLogger(LindgrenEKF.__module__)
+    level = log.level
+    log.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        log.setLevel(level)
+
+
+def record(path: Path, seed: int, progress: bool = False) -> Recording:
+    """Drive ``path`` once in FarmField-v0 (steered on scheme 1) and record every frame."""
+    limit_s = path.duration_s + 20.0
+    env = gym.make(ENV_ID, path=path, estimator_kwargs={"scheme": STEER_SCHEME},
+                   max_episode_s=limit_s, max_episode_steps=int(limit_s * 20.0) + 1)
+    with contextlib.closing(env), quiet_estimator():  # steering EKF's skips: in its extras
+        base = env.unwrapped
+        rec = FrameRecorder()
+        bar = step_bar(progress, base.max_steps, f"drive {path.name}")
+        rollout(env, baseline_controller(env), seed=seed, recorders=[rec], progress=bar)
+        if bar is not None:
+            bar.close()
+        spec = base.vehicle
+        return Recording(
+            path=path, frames=rec.frames, t_s=np.array([f.t_s for f in rec.frames]),
+            truth=np.array(rec.truth), s_true_m=np.array(rec.s_true_m),
+            oracle=base.true_soil(),
+            params=LindgrenNoise(k_s0=default_k_s_prior(spec), **FILTER),
+            geometry=odometry_geometry(spec), beacons_xy=base.beacons_xy)

@@ -1,0 +1,103 @@
+"""The paper-vs-simulation table of ``slipenv reproduce lindgren`` and the targets of issue #3.
+
+:func:`table_rows` is the one source of the table; :func:`format_table` prints it,
+:func:`markdown_rows` feeds the results page (:mod:`.docs`).
+"""
+
+from __future__ import annotations
+
+from ..results import finite, write_json
+
+__all__ = ["finite", "format_table", "markdown_rows", "nis_distance", "table_rows", "targets",
+           "write_json"]
+
+
+def nis_distance(value: float, band: list[float]) -> float:
+    """How far a time-averaged NIS lies outside its band (0 inside)."""
+    return max(band[0] - value, value - band[1], 0.0)
+
+
+def targets(m: dict) -> dict[str, dict]:
+    """Issue #3's targets, each with its value, limit and whether the run met it."""
+    dev, nis_, drop = m["mean_deviation_m"], m["nis"], m["dropout_final_error_m"]
+    rows = {
+        "slip_model <= 0.3 no_slip_model": (drop["slip_model"], 0.3 * drop["no_slip_model"]),
+        "scheme4 deviation <= 0.7 scheme3": (dev["scheme4"], 0.7 * dev["scheme3"]),
+        "scheme4 NIS closer to band than scheme3": (nis_distance(nis_["scheme4"], nis_["band"]),
+                                                    nis_distance(nis_["scheme3"], nis_["band"])),
+        "slip_model <= 1.5 oracle": (drop["slip_model"], 1.5 * drop["oracle"]),
+    }
+    return {k: {"value": v, "limit": lim, "met": bool(v <= lim if "<=" in k else v < lim)}
+            for k, (v, lim) in rows.items()}
+
+
+def table_rows(m: dict, paper: dict) -> list[tuple]:
+    """(quantity, paper, simulation) for Tables 1-3 and Fig. 7; one-element rows are headings.
+
+    ``m`` is the experiment's ``metrics``, ``paper`` its ``PAPER`` dict; rows the paper has no
+    number for (the true errors, NEES, the oracle, the variants) have None as paper value.
+    """
+    c, d = m["circles"], m["dropout"]
+    rows: list[tuple] = [("(a) 4 m circles, clockwise arc at constant speed",)]
+    for s in ("scheme3", "scheme4"):
+        rows.append((f"mean deviation from scheme 1 [m], {s}", paper["mean_deviation_m"][s],
+                     m["mean_deviation_m"][s]))
+    rows.append(("  scheme3 with the estimator's χ² bearing gate", None,
+                 c["mean_deviation_m"]["scheme3_gated"]))
+    for s in ("scheme3", "scheme4", "oracle"):
+        rows.append((f"  true mean error [m] / pose NEES, {s}", None,
+                     f"{c['true_error_mean_m'][s]:.3f} / {c['nees_pose'][s]:.2f}"))
+    for key, label in (("nis", "NIS, Eq. 43"), ("autocorr_mean", "autocorrelation mean"),
+                       ("autocorr_var", "autocorrelation variance"),
+                       ("autocorr_share_inside", "share inside ±1.96/√K")):
+        for s in ("scheme3", "scheme4"):
+            rows.append((f"{label}, {s}", paper[key][s], m[key][s]))
+    band, wh = m["nis"]["band"], m["nis"]["band_wilson_hilferty"]
+    rows.append(("NIS 95 % band: exact (Eq. 44)", "1.883-2.120",
+                 f"{band[0]:.3f}-{band[1]:.3f} ({wh[0]:.3f}-{wh[1]:.3f})"))
+    rows.append(("K, odometric innovations in the window", paper["n_samples"],
+                 m["n_samples"]["scheme4"]))
+    rows.append((f"(b) straights, laser + odometry, laser cut at {d['cut_s']:.0f} s, mean of "
+                 f"{len(d['seeds'])} drives",))
+    for key in ("no_slip_model", "slip_model", "oracle"):
+        rows.append((f"final position error [m], {key}", paper["dropout_final_error_m"][key],
+                     m["dropout_final_error_m"][key]))
+    f1 = d["first_drive_final_error_m"]
+    rows.append((f"  first drive: no_slip_model {f1['scheme3']:.3f} m; with the estimator's "
+                 "χ² bearing gate", None, f1["scheme3_gated"]))
+    rows.append((f"  first drive: slip_model {f1['scheme4']:.3f} m; with the estimator's soil "
+                 "random walk", None, f1["scheme4_default_soil_noise"]))
+    return rows
+
+
+def cell(v) -> str:
+    """A table cell: ``-`` for no value, 4 significant digits for a float."""
+    return "-" if v is None else (f"{v:.4g}" if isinstance(v, float) else str(v))
+
+
+def target_lines(tg: dict) -> list[str]:
+    """One ``[met]``/``[MISSED]`` line per target: value against limit."""
+    return [f"[{'met' if t['met'] else 'MISSED'}] {k}: {t['value']:.4g} vs {t['limit']:.4g}"
+            for k, t in tg.items()]
+
+
+def format_table(m: dict, paper: dict, tg: dict, run_time_s: float) -> str:
+    """Quantity | paper | simulation for Tables 1-3 and Fig. 7, then the targets of issue #3."""
+    rows = table_rows(m, paper)
+    width = max(len(r[0]) for r in rows)
+    lines = [f"{'quantity':<{width}}  {'paper':>12}  {'simulation':>20}", "-" * (width + 36)]
+    lines += [r[0] if len(r) == 1 else f"{r[0]:<{width}}  {cell(r[1]):>12}  {cell(r[2]):>20}"
+              for r in rows]
+    lines.append("targets (issue #3):")
+    lines += ["  " + line for line in target_lines(tg)]
+    lines.append(f"run time {run_time_s:.1f} s")
+    return "\n".join(lines)
+
+
+def markdown_rows(m: dict, paper: dict) -> list[tuple]:
+    """:func:`table_rows` with formatted cells, for a Markdown table."""
+    def label(text: str) -> str:  # an indented row is a variant of the row above
+        return "↳ " + text.strip() if text.startswith("  ") else text
+
+    return [r if len(r) == 1 else (label(r[0]), cell(r[1]), cell(r[2]))
+            for r in table_rows(m, paper)]

@@ -1,0 +1,36 @@
+"""Writing an experiment's result: standard JSON, and the figures' file names."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path as FsPath
+from typing import Any
+
+import numpy as np
+
+
+def finite(obj: Any) -> Any:
+    """``obj`` with NaN/inf replaced by None and numpy values by Python ones (standard JSON)."""
+    if isinstance(obj, dict):
+        return {k: finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [finite(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return finite(obj.tolist())
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+def write_json(result: dict, json_path: str | FsPath) -> FsPath:
+    """Write ``result`` as indented standard JSON, creating the folder."""
+    out = FsPath(json_path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with open(out, "w") as fh:
+        json.dump(finite(result), fh, indent=2)
+    return out

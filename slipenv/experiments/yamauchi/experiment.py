@@ -1,0 +1,205 @@
+"""``slipenv reproduce yamauchi``: identification, odometry replays and circles, in order."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path as FsPath
+
+import numpy as np
+
+from slipenv.envs.estimation import odometry_geometry
+from slipenv.estimators.skid_steer.identification import evaluate_runs, fit_slip_angle_runs
+from slipenv.vehicles.presets import tracked_patako
+
+from ..progress import iterate
+from ..results import write_json
+from . import model_file
+from .circle import circle_episode, mean_episodes
+from .docs import write_results_page
+from .odometry import odometry_errors
+from .paper import PAPER
+from .plots import save_figures
+from .report import format_table
+from .rotation import collect_runs, split_runs
+from .settings import QUICK, TARGETS, Settings
+from .slips import fit_n, slip_run
+
+
+def identify(cfg: Settings, train: list, test: list, geom) -> dict:
+    """Endo's n per tilt (and per turning direction, a diagnostic) and one Eq. 9 regression
+    per turning direction, scored on the held-out runs.
+
+    One regression per direction departs from the paper: on a slope part of the slip angle is
+    even in the turning direction, which Eq. 9's regressors carry only as a sign.
+    """
+    fits, samples = {}, {}
+    for t in cfg.tilts_deg:
+        fits[t], samples[t] = fit_n([r for r in train if r.tilt_deg == t], geom,
+                                    cfg.smooth_steps)
+    n_by_tilt = {t: f.n for t, f in fits.items()}
+    n_by_direction = {}  # diagnostic: Endo's relation does not know which way is uphill
+    for t in cfg.tilts_deg:
+        for d in cfg.directions:
+            try:
+                f = fit_n([r for r in train if r.tilt_deg == t and r.direction == d], geom,
+                          cfg.smooth_steps)[0].n
+            except ValueError:
+                f = None
+            n_by_direction[f"{t:g}_{'ccw' if d > 0 else 'cw'}"] = f
+    by_dir = {}
+    for d in cfg.directions:
+        tr = [slip_run(r, geom, n_by_tilt[r.tilt_deg], cfg) for r in train if r.direction == d]
+        te_runs = [r for r in test if r.direction == d]
+        te = [slip_run(r, geom, n_by_tilt[r.tilt_deg], cfg) for r in te_runs]
+        model = fit_slip_angle_runs(tr)
+        rmse = {k: float(np.sqrt(v.mean()))
+                for k, v in odometry_errors(te_runs, geom, n_by_tilt, model).items()}
+        limit = rmse.pop("slip_compensated_true_beta")
+        by_dir["ccw" if d > 0 else "cw"] = {
+            "model": model, "beta_rmse_rad": evaluate_runs(model, te), "test_runs": te_runs,
+            "odometry_rmse_m": rmse, "true_beta_rmse_m": limit}
+    return {"fits": fits, "samples": samples, "n_by_tilt": n_by_tilt,
+            "n_by_direction": n_by_direction, "by_dir": by_dir}
+
+
+def follow_circle(cfg: Settings, sc_kwargs: dict, seed: int, progress: bool) -> tuple:
+    """§3.1: gains tuned on flat rigid ground, then the three set-ups on the slope and the
+    two limits. Returns (path_following metrics, episodes by set-up, limit metrics)."""
+    # Gains tuned once on flat rigid ground (§3.1: "determined on a solid floor in advance").
+    tuning = {p: circle_episode(cfg, p, False, "gyrodometry", {}, seed, 0.0, "concrete")
+              for p in iterate(cfg.poles_rps, progress, "gain search (concrete)")}
+    pole = min(tuning, key=lambda p: tuning[p]["rmse_m"])
+    circle_seeds = [seed + i for i in range(cfg.circle_seeds)]
+    setups = {"feedback": (False, "slip_compensated", sc_kwargs),
+              "feedforward": (True, "slip_compensated", sc_kwargs),
+              "feedback_gyrodometry": (False, "gyrodometry", {})}
+    episodes = {k: [circle_episode(cfg, pole, ff, est, kw, s, cfg.circle_tilt_deg)
+                    for s in circle_seeds]
+                for k, (ff, est, kw) in iterate(list(setups.items()), progress, "circles")}
+    following = {k: mean_episodes(v) for k, v in episodes.items()}
+    # What limits the lap: the same two laws with a perfect slip-angle regression (Endo's
+    # slip ratios still in the odometry), and with perfect odometry. Steering on the truth, a
+    # seed changes nothing (it draws only sensor noise), so one seed is run.
+    limit_plan = [(mode, law, s) for mode in ("true_beta", "truth")
+                  for law in ("feedback", "feedforward")
+                  for s in (circle_seeds if mode == "true_beta" else circle_seeds[:1])]
+    limit_laps: dict[tuple[str, str], list[dict]] = {}
+    for mode, law, s in iterate(limit_plan, progress, "circle limits"):
+        limit_laps.setdefault((mode, law), []).append(circle_episode(
+            cfg, pole, law == "feedforward", "slip_compensated", sc_kwargs, s,
+            cfg.circle_tilt_deg, steer_on=mode))
+    for ref in ("feedback", "feedback_gyrodometry"):
+        key = "rmse_improvement" + ("" if ref == "feedback" else "_vs_gyrodometry_feedback")
+        following[key] = 1.0 - following["feedforward"]["rmse_m"] / following[ref]["rmse_m"]
+    following["pole_rps"] = pole
+    # from_poles: k_eta = p^3/v, k_phi = 3 p^2, k_omega = 3 p.
+    following["gains"] = {"k_eta": pole**3 / cfg.speed_mps, "k_phi": 3.0 * pole**2,
+                          "k_omega": 3.0 * pole}
+    following["rigid_ground_rmse_m_by_pole"] = {f"{p:g}": tuning[p]["rmse_m"] for p in tuning}
+    limits = {mode: {law: mean_episodes(limit_laps[mode, law])
+                     for law in ("feedback", "feedforward")}
+              for mode in ("true_beta", "truth")}
+    for pair in limits.values():
+        pair["feedforward_to_feedback_mean"] = (pair["feedforward"]["mean_error_m"]
+                                                / pair["feedback"]["mean_error_m"])
+    return following, episodes, limits
+
+
+def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
+        json_path: str | None = None, seed: int = 0, progress: bool = True,
+        save_model: str | None = None, settings: Settings | None = None,
+        docs_dir: str | None = None) -> dict:
+    """Run the experiment; print paper vs simulation; save figures, the fitted model and JSON.
+
+    Parameters
+    ----------
+    quick : bool
+        Fewer repetitions (:data:`~.settings.QUICK`), the same experiments.
+    out_dir : str
+        Folder for the figures and ``slip_model.json`` (the counter-clockwise fit).
+    json_path : str, optional
+        Write the result as JSON.
+    seed : int
+        Seeds the run plan (start headings, sensor noise, train/test split) and the circles.
+    progress : bool
+        Show progress bars.
+    save_model : str, optional
+        Also write the counter-clockwise model to this path (a maintainer refreshing
+        ``slipenv/data/yamauchi_slip_model.json`` in a source checkout;
+        :func:`~.model_file.save_model` refuses an installed package).
+    settings : Settings, optional
+        Overrides ``quick``.
+    docs_dir : str, optional
+        Write the results page ``docs_dir/yamauchi.md`` (figures copied beside it).
+    """
+    cfg = settings or (QUICK if quick else Settings())
+    model_out = None if save_model is None else model_file.model_path(save_model)  # fail early
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(seed)
+    geom = odometry_geometry(tracked_patako())
+    out = FsPath(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+
+    runs = collect_runs(cfg, rng, progress)
+    train, test = split_runs(runs, cfg, rng)
+    ident = identify(cfg, train, test, geom)
+    fits, n_by_tilt, by_dir = ident["fits"], ident["n_by_tilt"], ident["by_dir"]
+    main = by_dir["ccw"]
+    model, n_circle = main["model"], n_by_tilt[cfg.circle_tilt_deg]
+    saved = model_file.model_record(model, n_circle, (
+        f"slipenv reproduce yamauchi{' --quick' if quick else ''} --seed {seed}: Eq. 9 on "
+        f"counter-clockwise rotation runs, Endo n at {cfg.circle_tilt_deg:g} deg"))
+    (out / "slip_model.json").write_text(json.dumps(saved, indent=2))
+    if model_out is not None:
+        model_file.save_model(saved, model_out)
+    following, episodes, circle_limits = follow_circle(
+        cfg, {"beta_model": model.to_dict(), "n": n_circle}, seed, progress)
+
+    odo = main["odometry_rmse_m"]
+    limits = {
+        "odometry_rmse_m": {"slip_compensated_true_beta": main["true_beta_rmse_m"]},
+        "odometry_ratio_to_gyrodometry": {
+            "slip_compensated": odo["slip_compensated"] / odo["gyrodometry"],
+            "slip_compensated_true_beta": main["true_beta_rmse_m"] / odo["gyrodometry"]},
+        "path_following": circle_limits,
+    }
+    metrics = {
+        "endo_n": {f"{t:g}": f.n for t, f in fits.items()},
+        "endo_n_ci95": {f"{t:g}": list(f.ci95) for t, f in fits.items()},
+        "endo_n_samples": {f"{t:g}": f.n_samples for t, f in fits.items()},
+        "endo_n_by_direction": ident["n_by_direction"],
+        "slip_angle_rmse_deg": math.degrees(main["beta_rmse_rad"]),
+        "slip_angle_model": model.to_dict(),
+        "odometry_rmse_m": odo,
+        "odometry_improvement_vs_gyrodometry": 1.0 - odo["slip_compensated"] / odo["gyrodometry"],
+        "clockwise": {"slip_angle_rmse_deg": math.degrees(by_dir["cw"]["beta_rmse_rad"]),
+                      "odometry_rmse_m": by_dir["cw"]["odometry_rmse_m"]}
+        if "cw" in by_dir else None,
+        "held_out_runs": [r.name for r in test],
+        "path_following": following,
+        "limits": limits,
+    }
+    metrics["targets_met"] = {
+        "slip_compensated_rmse_le_0.4_gyrodometry":
+            odo["slip_compensated"] <= TARGETS["odometry_ratio_max"] * odo["gyrodometry"],
+        "feedforward_mean_le_0.5_feedback":
+            following["feedforward"]["mean_error_m"]
+            <= TARGETS["feedforward_ratio_max"] * following["feedback"]["mean_error_m"],
+    }
+    metrics["run_time_s"] = time.perf_counter() - t0
+    result = {"metrics": metrics, "paper": PAPER,
+              "settings": {k: getattr(cfg, k) for k in cfg.__dataclass_fields__},
+              "quick": quick, "seed": seed}
+    figures = save_figures(out, cfg, geom, fits, ident["samples"], main, episodes, n_by_tilt)
+    print(format_table(result))
+    print("figures: " + ", ".join(str(f) for f in figures))
+    if model_out is not None:
+        print(f"model: {model_out}")
+    if json_path:
+        print(f"metrics: {write_json(result, json_path)}")
+    if docs_dir is not None:
+        print(f"page: {write_results_page(result, figures, docs_dir)}")
+    return result
+

@@ -1,0 +1,74 @@
+"""The paper-vs-simulation table of ``slipenv reproduce yamauchi``.
+
+:func:`table_rows` is the one source of the table: :func:`format_table` prints it, the results
+page (:mod:`.docs`) renders the same rows in Markdown. Rows whose label starts with
+``limit:`` are measured limits, ``target:`` rows the targets of issue 4.
+"""
+
+from __future__ import annotations
+
+
+def table_rows(result: dict) -> list[tuple[str, str, str]]:
+    """(quantity, paper, simulation), one row per reported number."""
+    m, paper = result["metrics"], result["paper"]
+    pf, ppf = m["path_following"], paper["path_following"]
+    odo = m["odometry_rmse_m"]
+    rows = [(f"Endo n, tilt {t}° [95 % CI]", f"{paper['endo_n'][t]:.3f}",
+             f"{m['endo_n'][t]:.3f} [{m['endo_n_ci95'][t][0]:.3f}, "
+             f"{m['endo_n_ci95'][t][1]:.3f}]") for t in m["endo_n"]]
+    rows += [("slip angle RMSE, held-out runs [deg]", "(Fig. 5)",
+              f"{m['slip_angle_rmse_deg']:.2f}")]
+    rows += [(f"odometry RMSE {k} [m]", "-", f"{v:.4f}") for k, v in odo.items()]
+    rows += [("odometry RMSE improvement vs gyrodometry",
+              f"{100 * paper['odometry_improvement_vs_gyrodometry']:.0f} %",
+              f"{100 * m['odometry_improvement_vs_gyrodometry']:.0f} %")]
+    if m.get("clockwise"):
+        cw = m["clockwise"]["odometry_rmse_m"]
+        rows.append(("  same, clockwise runs (own Eq. 9 fit)", "-",
+                     f"{100 * (1 - cw['slip_compensated'] / cw['gyrodometry']):.0f} %"))
+    labels = {"feedback_gyrodometry": "Eq. 9 on gyrodometry (paper's conventional)",
+              "feedback": "Eq. 9 on slip-compensated odometry",
+              "feedforward": "Eq. 10 (β feed-forward) on slip-compensated"}
+    for key, label in labels.items():
+        p = ppf.get(key, {}).get("mean_error_m")
+        rows.append((f"circle 15°, {label}: mean error [cm]",
+                     "-" if p is None else f"{100 * p:.1f}",
+                     f"{100 * pf[key]['mean_error_m']:.1f} (RMSE {100 * pf[key]['rmse_m']:.1f},"
+                     f" {pf[key]['completed']}/{len(pf[key]['per_seed_mean_error_m'])} laps)"))
+    rows.append(("circle RMSE improvement, Eq. 10 vs Eq. 9 on gyrodometry",
+                 f"{100 * ppf['rmse_improvement']:.0f} %",
+                 f"{100 * pf['rmse_improvement_vs_gyrodometry_feedback']:.0f} %"))
+    rows.append(("circle RMSE improvement, Eq. 10 vs Eq. 9 (same odometry)", "-",
+                 f"{100 * pf['rmse_improvement']:.0f} %"))
+    lim = m["limits"]
+    rows.append(("limit: slip-compensated with the true β, RMSE / gyrodometry", "-",
+                 f"{lim['odometry_ratio_to_gyrodometry']['slip_compensated_true_beta']:.2f}"
+                 f" (Eq. 9: {lim['odometry_ratio_to_gyrodometry']['slip_compensated']:.2f})"))
+    for mode, label in (("true_beta", "odometry with the true β"),
+                        ("truth", "steering on the true pose and β")):
+        pair = lim["path_following"][mode]
+        rows.append((f"limit: circle 15°, {label}: mean error Eq. 9 -> Eq. 10 [cm]", "-",
+                     f"{100 * pair['feedback']['mean_error_m']:.1f} -> "
+                     f"{100 * pair['feedforward']['mean_error_m']:.1f} "
+                     f"(ratio {pair['feedforward_to_feedback_mean']:.2f})"))
+    rows += [(f"target: {k}", "", "met" if v else "NOT met") for k, v in m["targets_met"].items()]
+    return rows
+
+
+def format_table(result: dict) -> str:
+    """Paper vs simulation as printed by the command, with a title line."""
+    m = result["metrics"]
+    rows = table_rows(result)
+    w0 = max(len(r[0]) for r in rows)
+    w1 = max(len(r[1]) for r in rows + [("", "paper")])
+    lines = [f"Yamauchi et al. — paper vs simulation ({'quick' if result['quick'] else 'full'},"
+             f" seed {result['seed']}, {m['run_time_s']:.0f} s)",
+             f"{'':<{w0}}  {'paper':>{w1}}  simulation", "-" * (w0 + w1 + 40)]
+    lines += [f"{a:<{w0}}  {b:>{w1}}  {c}" for a, b, c in rows]
+    return "\n".join(lines)
+
+
+def markdown_rows(result: dict) -> list[tuple[str, str, str]]:
+    """:func:`table_rows` for a Markdown table (a variant row marked ``↳``)."""
+    return [("↳ " + a.strip() if a.startswith("  ") else a, b, c)
+            for a, b, c in table_rows(result)]

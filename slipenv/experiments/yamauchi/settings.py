@@ -1,0 +1,56 @@
+"""What ``slipenv reproduce yamauchi`` runs (Yamauchi et al. §2.3 and §3.1) and its targets."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+ENV_ID = "slipenv/TrackedSlopeCircle-v0"
+ORACLE_MAX_SLIP_ANGLE_RAD = 1.5  # [rad] the true β is not clipped like a regression's (1 rad)
+TARGETS = {"odometry_ratio_max": 0.4, "feedforward_ratio_max": 0.5}  # issue 4
+STEER_ON = ("observation", "true_beta", "truth")
+"""What a circle episode steers on: the env's observation (what a user gets); slip-compensated
+odometry with the true β in place of Eq. 9 (a limit: perfect slip-angle regression, Endo's
+slip ratios); the true pose and β (a limit: perfect odometry)."""
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What the experiment runs; ``QUICK`` has fewer repetitions, the same experiments.
+
+    Angles in degrees, speeds in m/s, times in s, as named.
+    """
+
+    tilts_deg: tuple[float, ...] = (0.0, 8.0, 15.0)
+    turn_rates_dps: tuple[float, ...] = (10.0, 20.0, 30.0)  # §2.3
+    directions: tuple[int, ...] = (1, -1)  # counter-clockwise, clockwise
+    repeats: int = 4  # runs per (tilt, rate, direction)
+    speed_mps: float = 0.05  # §2.3
+    rotation_deg: float = 90.0  # §2.3: "about 90 degrees"
+    heading_jitter_deg: float = 5.0  # start heading ± this, uniform (set by hand in the paper)
+    max_rotation_s: float = 30.0
+    test_fraction: float = 1.0 / 3.0
+    smooth_steps: int = 5  # centred window of the slip derivatives [control steps]
+    min_speed_mps: float = 0.01  # the slip angle of a vehicle at rest is undefined
+    circle_tilt_deg: float = 15.0  # §3.1
+    circle_radius_m: float = 0.25  # §3.1
+    circle_seeds: int = 5  # §3.1 ran each law three times
+    poles_rps: tuple[float, ...] = (0.15, 0.25, 0.4, 0.6, 1.0)  # rigid-ground gain search
+
+    def __post_init__(self) -> None:
+        if not self.tilts_deg or any(not 0.0 <= t < 90.0 for t in self.tilts_deg):
+            raise ValueError(f"tilts_deg must be angles in [0, 90), got {self.tilts_deg}")
+        if set(self.directions) - {1, -1} or not self.directions:
+            raise ValueError(f"directions must be 1 and/or -1, got {self.directions}")
+        for name in ("repeats", "smooth_steps", "circle_seeds"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
+        for name in ("speed_mps", "rotation_deg", "max_rotation_s", "circle_radius_m"):
+            if not getattr(self, name) > 0.0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
+        if not 0.0 < self.test_fraction < 1.0:
+            raise ValueError(f"test_fraction must be in (0, 1), got {self.test_fraction}")
+        if not self.poles_rps or min(self.poles_rps) <= 0.0:
+            raise ValueError(f"poles_rps must be positive, got {self.poles_rps}")
+
+
+QUICK = Settings(repeats=2, circle_seeds=3, poles_rps=(0.15, 0.3, 0.6))

@@ -1,0 +1,175 @@
+"""Slip as a state: the relaxation-length step, the soil dampers and the resistance ramp.
+
+Plain float functions the simulation calls per wheel and per physics substep (convention of
+`contact`: s > 0 drives, tan_beta = v_lat/|v_long|, forces in the wheel's heading frame).
+
+Relaxation (Pacejka, Tyre and Vehicle Dynamics, 3rd ed., §7.2.1). The slip ratio and the slip
+angle are states with a relaxation length sigma [m],
+
+    sigma ds/dt + V s = r omega - v,      sigma db/dt + V b = v_lat,
+    V = max(|r omega|, |v|, |v_lat|),
+
+whose steady state is the kinematic slip (`contact.slip_ratio`, and v_lat/|v| at ordinary
+slip). One reference speed V for both components keeps (s, tan_beta) along the contact point's
+sliding velocity (r omega - v, v_lat) even at large slip, which the combined-slip laws split the
+resultant by. At standstill V = 0 and the state integrates the slip displacement, so a parked
+vehicle is held by a soil "spring" (the Janosi shear deformation) instead of creeping, and a
+wheel spinning at v = 0 reaches s = 1 with no division by zero. `relax_slip` takes one backward
+Euler step, unconditionally stable for this linear ODE, which keeps a light wheel smooth even
+when its spin time constant falls below the time step.
+
+Damping (the sigma_1 term of the LuGre friction model, Canudas de Wit, Olsson, Astrom and
+Lischinsky, IEEE TAC 40(3), 1995; faded with speed as in Canudas de Wit et al. 2003). Held still,
+the relaxation state is an undamped spring of stiffness C/sigma [N/m] (C = dF/ds at s = 0);
+`critical_damping_ns_per_m` sizes its damper, `lateral_soil_damping_n` and
+`longitudinal_soil_damping_n` apply it. Both vanish in steady slip, so the force laws stay
+exact there.
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = [
+    "critical_damping_ns_per_m",
+    "lateral_soil_damping_n",
+    "longitudinal_soil_damping_n",
+    "relax_slip",
+    "resistance_along_travel_n",
+]
+
+
+def relax_slip(slip: float, tan_beta: float, rim_speed_mps: float, long_speed_mps: float,
+               lat_speed_mps: float, step_per_length: float) -> tuple[float, float, float]:
+    """One backward-Euler step of the slip relaxation ODE (Pacejka §7.2.1; module docstring).
+
+    With h = dt/sigma: s' = (s + h (r omega - v))/(1 + h V), b' = (b + h v_lat)/(1 + h V),
+    each clipped to [-1, 1] (full slip either way, as `contact.slip_ratio`).
+
+    Parameters
+    ----------
+    slip, tan_beta : float
+        State at the start of the step: slip ratio s [-] and tan of the slip angle b [-].
+    rim_speed_mps : float
+        r_eff omega [m/s], the speed the wheel would travel at without slip.
+    long_speed_mps, lat_speed_mps : float
+        v, v_lat [m/s]: the contact point's velocity along the wheel's heading and to its left.
+    step_per_length : float
+        h = dt/sigma [s/m]: time step over relaxation length.
+
+    Returns
+    -------
+    slip, tan_beta : float
+        The state at the end of the step.
+    reference_speed_mps : float
+        V = max(|r omega|, |v|, |v_lat|) [m/s], the speed the dampers fade with.
+    """
+    v_ref = max(abs(rim_speed_mps), abs(long_speed_mps), abs(lat_speed_mps))
+    leak = 1.0 + step_per_length * v_ref
+    s = (slip + step_per_length * (rim_speed_mps - long_speed_mps)) / leak
+    t = (tan_beta + step_per_length * lat_speed_mps) / leak
+    s = 1.0 if s > 1.0 else (-1.0 if s < -1.0 else s)
+    t = 1.0 if t > 1.0 else (-1.0 if t < -1.0 else t)
+    return s, t, v_ref
+
+
+def critical_damping_ns_per_m(slip_stiffness_n: float, relaxation_m: float, mass_kg: float,
+                              damping_ratio: float, max_ns_per_m: float) -> float:
+    """Damper c = min(2 zeta sqrt(k m), c_max) [N s/m] of the soil spring k = C/sigma.
+
+    The relaxation state held still is a spring of stiffness k = C/sigma [N/m] carrying the
+    mass m; c is `damping_ratio` zeta times its critical damping 2 sqrt(k m) (LuGre's sigma_1,
+    Canudas de Wit et al. 1995), capped at `max_ns_per_m` (an explicit damper is stable below
+    m/dt).
+
+    Parameters
+    ----------
+    slip_stiffness_n : float
+        C = dF/ds at s = 0 [N per unit slip], >= 0.
+    relaxation_m : float
+        Relaxation length sigma [m], > 0.
+    mass_kg : float
+        Mass the spring moves [kg].
+    damping_ratio : float
+        zeta [-], >= 0.
+    max_ns_per_m : float
+        Cap on c [N s/m].
+    """
+    c = 2.0 * damping_ratio * math.sqrt(slip_stiffness_n / relaxation_m * mass_kg)
+    return c if c < max_ns_per_m else max_ns_per_m
+
+
+def lateral_soil_damping_n(tan_beta_change: float, reference_speed_mps: float,
+                           damping_n: float, fade_speed_mps: float) -> float:
+    """Side damper on the lateral shear-deformation rate, faded with speed [N].
+
+    F = -d delta(tan_beta)/(1 + (V/v_f)^4), with d = c sigma/dt [N per unit change of the state
+    in one step] so that d delta(tan_beta) = c sigma d(tan_beta)/dt: LuGre's sigma_1 term on
+    the deformation rate (Canudas de Wit et al. 1995). Zero in steady side slip (the state does
+    not change), about full at crawling speed, where a turning tracked vehicle otherwise rocks at
+    several Hz, and faded out (1/(1 + (V/v_f)^4)) where the relaxation leak V/sigma already
+    damps the spring (Canudas de Wit et al. 2003 fade sigma_1 with speed too).
+
+    Parameters
+    ----------
+    tan_beta_change : float
+        Change of the tan_beta state over the step [-].
+    reference_speed_mps : float
+        V [m/s] (from `relax_slip`).
+    damping_n : float
+        d [N per unit tan_beta change per step], >= 0.
+    fade_speed_mps : float
+        v_f [m/s], > 0.
+    """
+    fade = reference_speed_mps / fade_speed_mps
+    fade *= fade
+    return -damping_n * tan_beta_change / (1.0 + fade * fade)
+
+
+def longitudinal_soil_damping_n(rim_speed_mps: float, long_speed_mps: float,
+                                reference_speed_mps: float, damping_ns_per_m: float,
+                                low_speed_mps: float) -> float:
+    """Lengthwise damper on the sliding speed r omega - v, only near standstill [N].
+
+    F = (1 - V/v_low) c (r omega - v) for V < v_low, else 0. The relaxation state alone is an
+    undamped spring at standstill, and its speed-dependent leak ratchets an oscillating parked
+    vehicle downhill (Pacejka §7.2); this damps it. Zero at and above v_low, so it never alters
+    driving forces (when rolling, a damper at the patch would act on the wheel's small spin
+    inertia and an explicit one would destabilise it), and zero when the wheel does not slide.
+
+    Parameters
+    ----------
+    rim_speed_mps, long_speed_mps : float
+        r omega and v [m/s].
+    reference_speed_mps : float
+        V [m/s] (from `relax_slip`).
+    damping_ns_per_m : float
+        c [N s/m] (`critical_damping_ns_per_m`).
+    low_speed_mps : float
+        v_low [m/s], > 0.
+    """
+    speed = reference_speed_mps / low_speed_mps
+    if speed < 1.0:
+        return (1.0 - speed) * damping_ns_per_m * (rim_speed_mps - long_speed_mps)
+    return 0.0
+
+
+def resistance_along_travel_n(resistance_n: float, long_speed_mps: float,
+                              ramp_speed_mps: float) -> float:
+    """Signed motion resistance R clip(v/v_r, -1, 1) [N], to apply against the heading.
+
+    Resistance opposes travel and vanishes at standstill (it is not static friction); the
+    linear ramp below v_r keeps it continuous (and explicit-stable) through zero and exact
+    above it.
+
+    Parameters
+    ----------
+    resistance_n : float
+        Magnitude R >= 0 [N] (compaction + rolling, from the force model).
+    long_speed_mps : float
+        v [m/s] along the wheel's heading.
+    ramp_speed_mps : float
+        v_r [m/s], > 0.
+    """
+    ramp = long_speed_mps / ramp_speed_mps
+    return resistance_n * (1.0 if ramp > 1.0 else (-1.0 if ramp < -1.0 else ramp))

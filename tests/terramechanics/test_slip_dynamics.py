@@ -1,0 +1,143 @@
+"""Slip relaxation, soil dampers and resistance ramp: closed forms, without PyBullet."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from slipenv.terramechanics.contact import slip_ratio
+from slipenv.terramechanics.slip_dynamics import (
+    critical_damping_ns_per_m,
+    lateral_soil_damping_n,
+    longitudinal_soil_damping_n,
+    relax_slip,
+    resistance_along_travel_n,
+)
+
+SIGMA_M = 0.02  # [m] relaxation length (a soil's Janosi K)
+DT_S = 1.0 / 240.0  # [s] physics substep
+
+
+def _run(s0: float, t0: float, rim: float, v: float, v_lat: float, steps: int,
+         dt_s: float = DT_S) -> tuple[float, float]:
+    s, t = s0, t0
+    for _ in range(steps):
+        s, t, _ = relax_slip(s, t, rim, v, v_lat, dt_s / SIGMA_M)
+    return s, t
+
+
+@pytest.mark.parametrize(("rim", "v"), [(1.0, 0.9), (0.5, 0.6), (-1.0, -0.9), (0.2, 0.0),
+                                        (0.0, 0.3), (0.05, 0.049)])
+def test_steady_state_is_the_kinematic_slip_ratio(rim, v):
+    s_ss = float(slip_ratio(rim, v))
+    s, t, v_ref = relax_slip(s_ss, 0.0, rim, v, 0.0, DT_S / SIGMA_M)
+    assert s == pytest.approx(s_ss, rel=1e-14, abs=1e-15)
+    assert t == 0.0 and v_ref == max(abs(rim), abs(v))
+    assert _run(0.0, 0.0, rim, v, 0.0, 5000)[0] == pytest.approx(s_ss, rel=1e-12, abs=1e-14)
+
+
+def test_steady_side_slip_is_v_lat_over_v_and_points_along_the_sliding_velocity():
+    rim, v, v_lat = 1.0, 0.8, 0.3  # |r omega| is the reference speed
+    s, t = _run(0.0, 0.0, rim, v, v_lat, 5000)
+    assert s == pytest.approx((rim - v) / rim, rel=1e-12)
+    assert t == pytest.approx(v_lat / rim, rel=1e-12)
+    assert math.atan2(t, s) == pytest.approx(math.atan2(v_lat, rim - v), rel=1e-12)
+    _, t = _run(0.0, 0.0, 0.8, 0.8, 0.1, 5000)  # no longitudinal slip: tan beta = v_lat/|v|
+    assert t == pytest.approx(0.1 / 0.8, rel=1e-12)
+
+
+@pytest.mark.parametrize("steps", [1, 3, 10, 40])
+def test_step_response_is_the_backward_euler_geometric_decay(steps):
+    rim, v = 0.5, 0.4
+    h_v = DT_S / SIGMA_M * rim  # h V
+    s_ss = (rim - v) / rim
+    s, _ = _run(0.3, 0.0, rim, v, 0.0, steps)
+    assert s == pytest.approx(s_ss + (0.3 - s_ss) * (1.0 + h_v) ** -steps, rel=1e-13)
+
+
+def test_step_response_converges_to_the_exponential_of_the_ode_at_first_order_in_dt():
+    """sigma ds/dt + V s = r omega - v from s = 0: s(t) = s_ss (1 - e^{-V t/sigma})."""
+    rim, v, t_end = 0.5, 0.45, 0.04  # V t/sigma = 1
+    s_ss = (rim - v) / rim
+    exact = s_ss * (1.0 - math.exp(-rim * t_end / SIGMA_M))
+    errors = []
+    for n in (40, 80, 160, 320):
+        s, _ = _run(0.0, 0.0, rim, v, 0.0, n, dt_s=t_end / n)
+        errors.append(abs(s - exact))
+    assert errors[-1] < 2e-3 * s_ss
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    np.testing.assert_allclose(ratios, 2.0, rtol=0.05)  # first order: halving dt halves it
+
+
+def test_at_standstill_the_state_integrates_the_slip_displacement():
+    """V -> 0: s = -(displacement)/sigma, the Janosi soil spring that holds a parked wheel."""
+    creep = 1e-6  # [m/s] the wheel centre creeps forward with the wheel locked
+    s, _ = _run(0.0, 0.0, 0.0, creep, 0.0, 240)  # 1 s
+    assert s == pytest.approx(-creep * 1.0 / SIGMA_M, rel=1e-4)
+    assert relax_slip(0.01, -0.02, 0.0, 0.0, 0.0, DT_S / SIGMA_M) == (0.01, -0.02, 0.0)
+
+
+def test_a_wheel_spinning_in_place_reaches_full_slip_monotonically_without_division_by_zero():
+    s, slips = 0.0, []
+    for _ in range(200):
+        s, _, _ = relax_slip(s, 0.0, 1.0, 0.0, 0.0, DT_S / SIGMA_M)
+        slips.append(s)
+    assert np.all(np.diff(slips) >= 0.0) and slips[-1] == pytest.approx(1.0, abs=1e-12)
+    assert slips[0] == pytest.approx(DT_S / SIGMA_M / (1.0 + DT_S / SIGMA_M), rel=1e-15)
+
+
+def test_states_are_clipped_to_full_slip_when_the_wheel_turns_against_the_motion():
+    assert _run(0.0, 0.0, 1.0, -1.0, 0.0, 200) == (1.0, 0.0)  # kinematic s = (1 + 1)/1 = 2
+    assert _run(0.0, 0.0, -1.0, 1.0, 0.0, 200) == (-1.0, 0.0)
+    assert _run(0.0, 0.0, 0.0, 0.0, -3.0, 200) == (0.0, -1.0)  # pure sideways sliding
+
+
+def test_lateral_damper_vanishes_in_steady_side_slip_and_opposes_the_change():
+    assert lateral_soil_damping_n(0.0, 0.05, 300.0, 0.2) == 0.0
+    assert lateral_soil_damping_n(0.01, 0.0, 300.0, 0.2) == pytest.approx(-3.0, rel=1e-15)
+    assert lateral_soil_damping_n(-0.01, 0.0, 300.0, 0.2) == pytest.approx(3.0, rel=1e-15)
+
+
+def test_lateral_damper_fades_as_one_over_one_plus_speed_ratio_to_the_fourth():
+    full = lateral_soil_damping_n(0.01, 0.0, 300.0, 0.2)
+    assert lateral_soil_damping_n(0.01, 0.2, 300.0, 0.2) == pytest.approx(full / 2, rel=1e-15)
+    assert lateral_soil_damping_n(0.01, 0.6, 300.0, 0.2) == pytest.approx(full / 82, rel=1e-14)
+
+
+def test_longitudinal_damper_acts_only_below_the_low_speed_and_only_when_sliding():
+    c, v_low = 40.0, 0.02
+    assert longitudinal_soil_damping_n(0.001, 0.001, 0.001, c, v_low) == 0.0  # no sliding
+    assert longitudinal_soil_damping_n(0.03, 0.0, 0.03, c, v_low) == 0.0  # driving
+    assert longitudinal_soil_damping_n(0.02, 0.0, 0.02, c, v_low) == 0.0  # continuous at v_low
+    # Linear fade: at V = v_low/2 half of c (r omega - v); full at standstill.
+    assert longitudinal_soil_damping_n(0.0, -0.01, 0.01, c, v_low) == pytest.approx(0.2, rel=1e-14)
+    assert longitudinal_soil_damping_n(1e-9, 0.0, 1e-9, c, v_low) == pytest.approx(4e-8, rel=1e-6)
+
+
+def test_critical_damping_makes_the_soil_spring_critically_damped_at_ratio_one():
+    stiffness_n, mass_kg = 3000.0, 12.0  # C = dF/ds [N], wheel's mass share
+    c = critical_damping_ns_per_m(stiffness_n, SIGMA_M, mass_kg, 1.0, 1e9)
+    k = stiffness_n / SIGMA_M  # [N/m]
+    assert c * c == pytest.approx(4.0 * k * mass_kg, rel=1e-14)  # m x'' + c x' + k x: double root
+    assert critical_damping_ns_per_m(stiffness_n, SIGMA_M, mass_kg, 0.5, 1e9) == pytest.approx(
+        c / 2, rel=1e-15)
+    assert critical_damping_ns_per_m(stiffness_n, SIGMA_M, mass_kg, 1.0, 100.0) == 100.0
+
+
+def test_resistance_ramps_linearly_through_zero_and_opposes_travel_beyond():
+    r, v_r = 5.0, 0.02
+    assert resistance_along_travel_n(r, 0.0, v_r) == 0.0
+    assert resistance_along_travel_n(r, 0.01, v_r) == pytest.approx(2.5, rel=1e-15)
+    assert resistance_along_travel_n(r, -0.01, v_r) == pytest.approx(-2.5, rel=1e-15)
+    assert resistance_along_travel_n(r, 3.0, v_r) == r
+    assert resistance_along_travel_n(r, -3.0, v_r) == -r
+
+
+def test_slip_dynamics_import_no_physics_engine():
+    code = ("import sys, slipenv.terramechanics.slip_dynamics, slipenv.terramechanics; "
+            "sys.exit('pybullet' in sys.modules)")
+    assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0
