@@ -23,7 +23,7 @@ CASE_LIMIT_S = 20.0  # hard bound per case (signal), far above a normal case's ~
 
 # ``SLIPENV_FUZZ_EXAMPLES=500 pytest tests/fuzz`` for a longer hunt than CI's.
 FUZZ = settings(
-    max_examples=int(os.environ.get("SLIPENV_FUZZ_EXAMPLES", "25")),
+    max_examples=int(os.environ.get("SLIPENV_FUZZ_EXAMPLES", "40")),
     deadline=timedelta(seconds=CASE_LIMIT_S),
     database=None,  # no .hypothesis folder in the checkout
     phases=[Phase.explicit, Phase.reuse, Phase.generate, Phase.shrink],  # no patch files
