@@ -17,6 +17,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+
 from slipenv.controllers.baseline import baseline_controller
 
 

@@ -27,7 +27,6 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from slipenv.controllers.baseline import baseline_controller
 from stable_baselines3 import PPO, SAC, TD3
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback
@@ -35,6 +34,7 @@ from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.logger import configure
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
+from slipenv.controllers.baseline import baseline_controller
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.rollout import TrajectoryRecorder, rollout
 

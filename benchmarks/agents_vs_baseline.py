@@ -30,13 +30,13 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import torch
-from slipenv.agents.residual import ResidualActionWrapper
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
 import slipenv  # noqa: F401  (registers the envs)
+from slipenv.agents.residual import ResidualActionWrapper
 from slipenv.evaluation.evaluate import evaluate
 
 TASKS = {  # env id -> (training soil = the preset's, held-out soil)

@@ -23,8 +23,8 @@ from slipenv.envs.estimation import odometry_geometry
 from slipenv.estimators.dead_reckoning import DeadReckoning
 from slipenv.rollout import RolloutResult, TrajectoryRecorder, rollout
 
-__all__ = ["BASELINE_NAMES", "EpisodeRecord", "EpisodeRecorder", "baseline_controller",
-           "completion_text", "format_table", "plot_episode", "run_episode", "summarize"]
+__all__ = ["BASELINE_NAMES", "EpisodeRecord", "EpisodeRecorder", "completion_text",
+           "format_table", "plot_episode", "run_episode", "summarize"]
 
 
 @dataclass

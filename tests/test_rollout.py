@@ -5,9 +5,9 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
-from slipenv.controllers.baseline import baseline_controller
 
 import slipenv  # noqa: F401  (registers the envs)
+from slipenv.controllers.baseline import baseline_controller
 from slipenv.rollout import TrajectoryRecorder, end_reason, rollout
 
 ENV = "slipenv/HuskySand-v0"

@@ -20,7 +20,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pybullet as p
 
 from slipenv.diagnose.extension import extend
 from slipenv.diagnose.select import Selection
@@ -28,9 +27,12 @@ from slipenv.diagnose.slip_law import ScaledSlip
 from slipenv.envs.config import SlipEnvConfig
 from slipenv.envs.factory import make_force_model, make_soil_map, make_vehicle
 from slipenv.logs.log import Log
+from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.simulator import PhysicsBlowUp, Simulator
 from slipenv.terrain.terrain import TerrainSpec
 from slipenv.vehicles.spec import VehicleSpec, WheelSpec
+
+p = import_pybullet()  # the banner-free first import (see slipenv.pybullet_quiet)
 
 REPLAY_S = 60.0  # [s] of log replayed in PyBullet for the report
 RIGID_LAW = {"diff_drive": "reina", "skid_steer": "janosi"}

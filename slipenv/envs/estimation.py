@@ -26,11 +26,11 @@ import numpy as np
 
 from slipenv.estimators.base import Estimator, OdometryGeometry
 from slipenv.estimators.dead_reckoning import DeadReckoning
-from slipenv.estimators.skid_steer.endo import EndoOdometry
 from slipenv.estimators.gyrodometry import Gyrodometry
 from slipenv.estimators.lindgren.ekf import LindgrenEKF
 from slipenv.estimators.lindgren.models import OracleSoil
 from slipenv.estimators.lindgren.params import LindgrenNoise
+from slipenv.estimators.skid_steer.endo import EndoOdometry
 from slipenv.vehicles.spec import VehicleSpec
 
 ENDO_N_HARD_FLOOR = 0.824  # Yamauchi Table 1

@@ -14,14 +14,16 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
 
+from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.wheel_soil import WheelSoilInjector
 from slipenv.terrain.terrain import TerrainSpec, build_terrain
 from slipenv.terramechanics.models import ForceModel
 from slipenv.terramechanics.soil_map import SoilMap
 from slipenv.vehicles.body import build_vehicle
 from slipenv.vehicles.spec import VehicleSpec
+
+p = import_pybullet()  # the banner-free first import (see slipenv.pybullet_quiet)
 
 GRAVITY_MPS2 = 9.81
 _PARKING_HEIGHT_M = 1e4  # [m] where a body waits, clear of any terrain, while rewound

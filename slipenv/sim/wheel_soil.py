@@ -21,8 +21,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
 
+from slipenv.pybullet_quiet import import_pybullet
 from slipenv.terramechanics.models import ForceModel, wheel_kernel
 from slipenv.terramechanics.slip_dynamics import (
     critical_damping_ns_per_m,
@@ -35,6 +35,8 @@ from slipenv.terramechanics.soil import SoilParams
 from slipenv.terramechanics.soil_map import SoilMap, UniformSoil
 from slipenv.vehicles.body import VehicleBody
 from slipenv.vehicles.spec import VehicleSpec
+
+p = import_pybullet()  # the banner-free first import (see slipenv.pybullet_quiet)
 
 _G = 9.81  # [m/s^2] gravity, for the static load share the dampers are sized at
 _DS = 1e-3  # [-] slip step of the finite-difference slip stiffness

@@ -234,7 +234,9 @@ def _mound_heights(spec: TerrainSpec, x: np.ndarray, y: np.ndarray) -> np.ndarra
 
 def build_terrain(spec: TerrainSpec, client: int) -> Terrain:
     """Create the ground body in ``client``; its friction is zero (the force law carries it)."""
-    import pybullet as p  # imported here: a spec alone must not load the physics engine
+    from slipenv.pybullet_quiet import import_pybullet
+
+    p = import_pybullet()  # here, not at module level: a spec alone must not load the engine
 
     if spec.kind == "mounds":
         n = int(round(spec.size_m / spec.resolution_m)) + 1

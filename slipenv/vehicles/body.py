@@ -16,10 +16,12 @@ import re
 import tempfile
 from dataclasses import dataclass
 
-import pybullet as p
 import pybullet_data
 
+from slipenv.pybullet_quiet import import_pybullet
 from slipenv.vehicles.spec import VehicleSpec
+
+p = import_pybullet()  # the banner-free first import (see slipenv.pybullet_quiet)
 
 _CYLINDER_ALONG_Y = (math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4))
 

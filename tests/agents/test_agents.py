@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from slipenv.agents.residual import ResidualActionWrapper
 from slipenv.agents.train import evaluate, make_env, train
 

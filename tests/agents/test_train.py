@@ -11,12 +11,12 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import yaml
+
 from slipenv.agents.residual import ResidualActionWrapper, ResidualPolicy
 from slipenv.agents.train import ALGORITHMS, load_policy, make_env, resolve_config, train
 from slipenv.agents.zoo import HYPERPARAMS_DIR, hyperparams_path, parse, read_entry
-from slipenv.controllers.baseline import baseline_controller
-
 from slipenv.cli import main
+from slipenv.controllers.baseline import baseline_controller
 
 ENV = "slipenv/HuskySand-v0"
 SHORT = {"max_episode_s": 4.0}

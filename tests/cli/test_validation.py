@@ -19,7 +19,6 @@ def no_work(monkeypatch):
         raise AssertionError("long work started before the input was checked")
 
     import slipenv.agents.train
-
     import slipenv.bench
     import slipenv.experiments
     import slipenv.run

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from slipenv.controllers.base import Controller
 
 from slipenv.contracts.observation import build_observation
+from slipenv.controllers.base import Controller
 from slipenv.paths import Path
 
 DT_S = 0.05  # [s] control period (20 Hz, as the env)

@@ -6,12 +6,12 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+
 from slipenv.controllers import BASELINE_NAMES, baseline_controller
 from slipenv.controllers.baseline import baseline_pole_rps
 from slipenv.controllers.pure_pursuit import PurePursuitController
 from slipenv.controllers.stanley import StanleyController
 from slipenv.controllers.yamauchi import YamauchiController
-
 from slipenv.paths.library import straight
 
 

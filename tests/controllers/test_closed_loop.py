@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from slipenv.controllers import CONTROLLERS, YamauchiController, controller_by_name
 
+from slipenv.controllers import CONTROLLERS, YamauchiController, controller_by_name
 from slipenv.paths import circle, field_rows, lindgren_circles, straight
 
 BETA_RAD = 0.2  # constant slip angle for the feed-forward tests

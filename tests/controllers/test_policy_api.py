@@ -7,6 +7,8 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
+
+from slipenv.contracts import observation as ob
 from slipenv.controllers import (
     CONTROLLERS,
     OBS_NAMES,
@@ -15,8 +17,6 @@ from slipenv.controllers import (
     build_observation,
     controller_by_name,
 )
-
-from slipenv.contracts import observation as ob
 from slipenv.paths import circle, straight
 
 

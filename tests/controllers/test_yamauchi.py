@@ -7,7 +7,6 @@ import warnings
 
 import numpy as np
 import pytest
-from slipenv.controllers import YamauchiController, is_hurwitz
 
 from slipenv.contracts.observation import (
     OBS_CROSS_TRACK,
@@ -19,6 +18,7 @@ from slipenv.contracts.observation import (
     OBS_SPEED,
     OBS_YAW_RATE,
 )
+from slipenv.controllers import YamauchiController, is_hurwitz
 
 
 def test_default_gains_give_a_hurwitz_polynomial_at_every_speed_up_to_v_max(scaling):

@@ -8,10 +8,10 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
-from slipenv.estimators.lindgren.ekf import LindgrenEKF, Scheme
 
 import slipenv  # noqa: F401  (registers the envs)
-from slipenv.run import baseline_controller
+from slipenv.controllers import baseline_controller
+from slipenv.estimators.lindgren.ekf import LindgrenEKF, Scheme
 
 N_STEPS = 300  # 15 s at 20 Hz: the first quarter circle, speed and slip settled
 

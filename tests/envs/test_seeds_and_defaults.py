@@ -6,9 +6,9 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
-from slipenv.controllers.baseline import baseline_controller
 
 import slipenv  # noqa: F401
+from slipenv.controllers.baseline import baseline_controller
 from slipenv.envs.render import ESTIMATE_RGB, PATH_RGB, TRUE_RGB
 from slipenv.envs.slip_env import render_modes
 

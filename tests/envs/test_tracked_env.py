@@ -1,7 +1,7 @@
 """The tracked slope env with Yamauchi's controllers used as policies (``predict`` on the env).
 
 Both controllers are the Yamauchi §3 law with the gains the baseline uses for 5 cm/s
-(``slipenv.run.baseline_controller``): Eq. 10 with the observation's β̂ (feed-forward) and
+(``slipenv.controllers.baseline_controller``): Eq. 10 with the observation's β̂ (feed-forward) and
 Eq. 9 with β = 0 (feedback), on the env's default observation (slip-compensated odometry).
 """
 
@@ -12,13 +12,13 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
-from slipenv.controllers.yamauchi import YamauchiController
 
 import slipenv  # noqa: F401
 from slipenv.contracts.observation import OBS_SLIP_ANGLE
+from slipenv.controllers import baseline_controller
+from slipenv.controllers.yamauchi import YamauchiController
 from slipenv.envs.registration import yamauchi_observation
 from slipenv.experiments.yamauchi import Settings, circle_episode
-from slipenv.run import baseline_controller
 
 ENV_ID = "slipenv/TrackedSlopeCircle-v0"
 FLAT_RIGID = dict(terrain="flat", soil="concrete")

@@ -19,12 +19,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+
+from slipenv.contracts import SensorFrame
 from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.lindgren import models as lm
 from slipenv.estimators.lindgren import observations as lo
 from slipenv.estimators.lindgren.params import LindgrenNoise
-
-from slipenv.contracts import SensorFrame
 from slipenv.sensors.beacons import BeaconScanner
 
 

@@ -12,12 +12,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from slipenv.contracts.frame import SensorFrame
 from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.skid_steer.endo import endo_slip_velocities
 from slipenv.estimators.skid_steer.identification import SlipRun, true_slips
 from slipenv.estimators.skid_steer.yamauchi import rotation_radius_m
-
-from slipenv.contracts.frame import SensorFrame
 
 TREAD_M = 0.41  # [m] Yamauchi Table 1
 SPROCKET_RADIUS_M = 0.06  # [m] assumed (slipenv Patako preset)

@@ -5,6 +5,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+
 from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.gyrodometry import Gyrodometry
 from slipenv.estimators.skid_steer.endo import (
@@ -15,7 +16,6 @@ from slipenv.estimators.skid_steer.endo import (
     endo_slip_velocities,
 )
 from slipenv.estimators.skid_steer.kinematics import body_velocity
-
 from tests.estimators import skid_steer_synth as synth
 
 TREAD = synth.TREAD_M

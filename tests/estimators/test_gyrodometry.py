@@ -5,11 +5,11 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+
 from slipenv.estimators.base import Estimator, OdometryGeometry
 from slipenv.estimators.dead_reckoning import DeadReckoning
 from slipenv.estimators.gyrodometry import Gyrodometry
 from slipenv.estimators.skid_steer.endo import EndoOdometry
-
 from tests.estimators import skid_steer_synth as synth
 
 R, TREAD, CPR = 0.06, 0.41, 1e9  # fine encoders: quantisation below 1e-9 rad

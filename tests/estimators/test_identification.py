@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pytest
+
 from slipenv.estimators.skid_steer.identification import (
     SlipAngleModel,
     evaluate,
@@ -15,7 +16,6 @@ from slipenv.estimators.skid_steer.identification import (
     true_slips,
 )
 from slipenv.estimators.skid_steer.kinematics import body_velocity
-
 from tests.estimators import skid_steer_synth as synth
 
 BETA_NOISE = 0.01  # [rad] motion-capture slip-angle noise

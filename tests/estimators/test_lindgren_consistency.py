@@ -8,6 +8,9 @@ import math
 
 import numpy as np
 import pytest
+
+from slipenv.contracts import wrap_angles
+from slipenv.contracts.frame import SensorFrame
 from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.consistency import (
     chi2_mean_band,
@@ -17,9 +20,6 @@ from slipenv.estimators.consistency import (
 )
 from slipenv.estimators.lindgren import models as lm
 from slipenv.estimators.lindgren.ekf import SENSORS, LindgrenEKF, LindgrenNoise, OracleSoil
-
-from slipenv.contracts import wrap_angles
-from slipenv.contracts.frame import SensorFrame
 from slipenv.sensors.beacons import BeaconScanner, default_beacons_xy
 from tests.estimators.lindgren_synth import simulate, straight_and_turn
 

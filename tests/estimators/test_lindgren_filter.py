@@ -10,6 +10,8 @@ import math
 import numpy as np
 import pytest
 from filterpy.kalman import ExtendedKalmanFilter
+
+from slipenv.contracts.frame import SensorFrame
 from slipenv.estimators.base import Estimator, OdometryGeometry
 from slipenv.estimators.lindgren import models as lm
 from slipenv.estimators.lindgren import observations as lo
@@ -20,8 +22,6 @@ from slipenv.estimators.lindgren.ekf import (
     Scheme,
     parse_scheme,
 )
-
-from slipenv.contracts.frame import SensorFrame
 from slipenv.sensors.beacons import BeaconScanner, default_beacons_xy
 from tests.estimators.lindgren_synth import simulate, straight_and_turn
 

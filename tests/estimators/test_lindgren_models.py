@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from filterpy.common import Q_continuous_white_noise
+
 from slipenv.estimators.lindgren import models as lm
 from slipenv.estimators.lindgren import observations as lo
 from slipenv.estimators.lindgren.models import OracleSoil

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+
 from slipenv.estimators.skid_steer.kinematics import (
     body_velocity,
     slips_from_body_velocity,

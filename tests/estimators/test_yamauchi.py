@@ -5,6 +5,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+
 from slipenv.estimators.base import Estimator
 from slipenv.estimators.gyrodometry import Gyrodometry
 from slipenv.estimators.skid_steer.endo import EndoOdometry
@@ -18,7 +19,6 @@ from slipenv.estimators.skid_steer.yamauchi import (
     next_angular_displacement,
     rotation_radius_m,
 )
-
 from tests.estimators import skid_steer_synth as synth
 
 GEOM = synth.GEOMETRY

@@ -8,8 +8,8 @@ import json
 import gymnasium as gym
 import numpy as np
 import pytest
-from slipenv.controllers import baseline_controller
 
+from slipenv.controllers import baseline_controller
 from slipenv.evaluation import evaluate_cli
 from slipenv.evaluation.evaluate import evaluate
 from slipenv.evaluation.trajectory import ape_translation, read_tum

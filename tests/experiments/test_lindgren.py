@@ -8,10 +8,10 @@ import math
 
 import numpy as np
 import pytest
-from slipenv.estimators.base import OdometryGeometry
-from slipenv.estimators.lindgren.ekf import LindgrenEKF, LindgrenNoise, Scheme
 
 from slipenv.contracts.frame import SensorFrame
+from slipenv.estimators.base import OdometryGeometry
+from slipenv.estimators.lindgren.ekf import LindgrenEKF, LindgrenNoise, Scheme
 from slipenv.experiments import experiment, lindgren
 from slipenv.experiments.lindgren import report
 from slipenv.experiments.lindgren.report import finite

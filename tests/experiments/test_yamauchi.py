@@ -9,10 +9,10 @@ from __future__ import annotations
 import json
 
 import pytest
-from slipenv.estimators.skid_steer.identification import SlipAngleModel
 
 from slipenv.cli import main
 from slipenv.envs.registration import yamauchi_observation
+from slipenv.estimators.skid_steer.identification import SlipAngleModel
 from slipenv.experiments import yamauchi
 
 TILTS = {"0", "8", "15"}

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+
 from slipenv.estimators.reina import (
     FTrace,
     FTraceScore,
@@ -13,7 +14,6 @@ from slipenv.estimators.reina import (
     TraceDetection,
     slip_angle_from_trace,
 )
-
 from slipenv.sensors.trace_camera import TraceCamera, TraceCameraConfig
 from slipenv.sensors.trace_history import history_from_poses
 

@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+
+from slipenv.contracts import SensorFrame
 from slipenv.estimators import DeadReckoning, OdometryGeometry
 from slipenv.estimators.reina import (
     CompassOdometry,
@@ -13,8 +15,6 @@ from slipenv.estimators.reina import (
     SlipRatioModel,
     final_position_error,
 )
-
-from slipenv.contracts import SensorFrame
 
 R, CPR = 0.09, 285.0
 GEOM = OdometryGeometry(R, 0.5, CPR, left=(0, 2), right=(1, 3))

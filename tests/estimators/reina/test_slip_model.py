@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+
 from slipenv.estimators.reina import SlipRatioModel, fit_slip_ratio_model
 
 
