@@ -5,7 +5,7 @@
 2. For ``slipenv/TrackedSlopeCircle-v0`` (trained on its preset soil, toyoura sand) and
    ``slipenv/FarmField-v0`` (field loam): a residual PPO agent (action = baseline + 0.3 ×
    residual, ``slipenv.agents.residual.ResidualActionWrapper``) trained for ``--timesteps``
-   env steps with 2 env processes, then evaluated with :func:`slipenv.evaluation.evaluate`
+   env steps with 2 env processes, then evaluated with :func:`slipenv.evaluation.evaluator`
    next to the baseline on held-out seeds (1000, 1001, ...; training uses 0 and 1) on the
    training soil and on a held-out soil (loose sand, never seen in training). Metrics are
    from the true pose. The target of issue 12 is >= 20 % lower true cross-track RMSE than the
@@ -37,7 +37,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
 import slipenv  # noqa: F401  (registers the envs)
 from slipenv.agents.residual import ResidualActionWrapper
-from slipenv.evaluation.evaluate import evaluate
+from slipenv.evaluation.evaluator import evaluate
 
 TASKS = {  # env id -> (training soil = the preset's, held-out soil)
     "slipenv/TrackedSlopeCircle-v0": ("toyoura_sand", "loose_sand"),

@@ -28,6 +28,7 @@ import gymnasium as gym
 
 import slipenv
 from slipenv.evaluation import evaluate_cli, sweep_cli
+from slipenv.testbed import cli as testbed_cli
 
 
 class SubParsers(Protocol):
@@ -340,6 +341,7 @@ SUBCOMMANDS: dict[str, tuple[Builder, Handler]] = {
     "train": (add_train, cmd_train),
     "evaluate": (evaluate_cli.add_parser, evaluate_cli.main),
     "sweep": (sweep_cli.add_parser, sweep_cli.main),
+    "fit-soil": (testbed_cli.add_parser, testbed_cli.main),
     "list": (add_list, cmd_list),
 }
 """name -> (function adding its sub-parser, handler returning the exit status). A new command

@@ -21,35 +21,25 @@ from slipenv.contracts.angles import wrap_angle
 from slipenv.controllers.baseline import BASELINE_NAMES, baseline_controller
 from slipenv.envs.estimation import odometry_geometry
 from slipenv.estimators.dead_reckoning import DeadReckoning
-from slipenv.rollout import RolloutResult, TrajectoryRecorder, rollout
+from slipenv.rollout import RolloutResult, Trajectory, TrajectoryRecorder, rollout
 
 __all__ = ["BASELINE_NAMES", "EpisodeRecord", "EpisodeRecorder", "completion_text",
            "format_table", "plot_episode", "run_episode", "summarize"]
 
 
-@dataclass
-class EpisodeRecord:
-    """Everything recorded along one episode (arrays over steps; slip of the driven wheels)."""
+@dataclass(frozen=True, kw_only=True)
+class EpisodeRecord(Trajectory):
+    """A :class:`~slipenv.rollout.Trajectory` of the driven wheels plus what the main job
+    reports: the reference path, how the episode ended, and plain dead reckoning on the same
+    sensor frames."""
 
     env_id: str
     seed: int
-    t_s: np.ndarray
-    true_pose: np.ndarray
-    est_pose: np.ndarray
-    cross_track_true_m: np.ndarray
-    wheel_slip: np.ndarray
-    slip_angle_rad: np.ndarray
-    actions: np.ndarray
-    rewards: np.ndarray
     reference_xy: np.ndarray
     end_reason: str
-    wheel_names: tuple[str, ...] = ()
     dead_reckoning_xy: np.ndarray | None = None
     info_last: dict = field(default_factory=dict)
-    wheel_channels: tuple[str, ...] = ()
     success: bool = False
-    progress_true: np.ndarray | None = None
-    progress_est: np.ndarray | None = None
 
 
 class EpisodeRecorder:

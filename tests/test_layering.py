@@ -32,7 +32,7 @@ LAYERS: dict[str, int] = {
     "slipenv.logs": 5, "slipenv.rollout": 5,  # the loop needs only gymnasium and contracts
     "slipenv.envs": 6,
     "slipenv.experiments": 7, "slipenv.diagnose": 7, "slipenv.agents": 7,
-    "slipenv.evaluation": 7, "slipenv.run": 7, "slipenv.bench": 7,
+    "slipenv.evaluation": 7, "slipenv.run": 7, "slipenv.bench": 7, "slipenv.testbed": 7,
     "slipenv.cli": 8,
     "slipenv": 8,  # the package root registers the envs
 }

@@ -16,8 +16,8 @@ import importlib
 from typing import Any
 
 _EXPORTS = {
-    "Evaluation": "slipenv.evaluation.evaluate",
-    "evaluate": "slipenv.evaluation.evaluate",
+    "Evaluation": "slipenv.evaluation.evaluator",
+    "evaluate": "slipenv.evaluation.evaluator",
     "METRICS": "slipenv.evaluation.metrics",
     "resolve_policy": "slipenv.evaluation.policies",
     "BUILTIN_POLICIES": "slipenv.evaluation.policies",

@@ -58,7 +58,7 @@ def _fail(message: str) -> int:
 
 def main(args: argparse.Namespace) -> int:
     """Run ``slipenv evaluate``; 0 on success, 2 on bad input."""
-    from slipenv.evaluation.evaluate import check_env, evaluate
+    from slipenv.evaluation.evaluator import check_env, evaluate
     from slipenv.evaluation.policies import resolve_policy
 
     try:

@@ -28,7 +28,7 @@ def plot_evaluation(evaluation, out_png: str | Path) -> Path:
     Parameters
     ----------
     evaluation : slipenv.evaluation.Evaluation
-        With its traces (a fresh :func:`~slipenv.evaluation.evaluate` result).
+        With its traces (a fresh :func:`~slipenv.evaluation.evaluator` result).
     out_png : path
         Where to save the figure.
     """

@@ -40,7 +40,7 @@ class EvaluationCache:
 
     def evaluate(self, policy: Any, env_id: str, seeds: Iterable[int] = DEFAULT_SEEDS, *,
                  max_steps: int | None = None, **env_kwargs: Any):
-        from slipenv.evaluation.evaluate import Evaluation, check_env, run_episode
+        from slipenv.evaluation.evaluator import Evaluation, check_env, run_episode
         from slipenv.evaluation.policies import resolve_policy
 
         source = resolve_policy(policy)
@@ -74,7 +74,7 @@ def slipenv_eval(slipenv_eval_cache: EvaluationCache) -> Callable[..., Any]:
     """Evaluate a policy on a slipenv env over seeds; returns an ``Evaluation`` whose metrics
     are attributes (``cross_track_rmse_m``, ``mean_cross_track_m``, ``success_rate``,
     ``energy_j``, ``odometry_final_error_m``, ``ape_rmse_m``, ...) with ``assert_below`` /
-    ``assert_above`` helpers. See :func:`slipenv.evaluation.evaluate`."""
+    ``assert_above`` helpers. See :func:`slipenv.evaluation.evaluator`."""
     return slipenv_eval_cache.evaluate
 
 

@@ -37,7 +37,7 @@ def run_cell(cell: dict, out_dir: str) -> dict:
 
     A module-level function of plain data, so a process pool or a Ray worker can run it.
     """
-    from slipenv.evaluation.evaluate import run_episode
+    from slipenv.evaluation.evaluator import run_episode
     from slipenv.evaluation.policies import resolve_policy
 
     metrics, _ = run_episode(resolve_policy(cell["policy"]), cell["env_id"], cell["seed"],

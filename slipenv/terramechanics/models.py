@@ -5,7 +5,8 @@ the physics is a per-wheel float kernel, ``model.scalar_kernel(soil)``:
 ``(slip, tan_beta, load_n) -> (fx_n, fy_n, resistance_n)`` with the soil's constants bound once
 (the simulation builds one per wheel per control step and calls it every physics substep). The
 force laws themselves are plain float functions in `janosi`, `lindgren` and `reina`; the models
-add the contact geometry, Bekker compaction and rolling resistance (`bekker`).
+add the contact geometry, Bekker compaction and rolling resistance (`bekker`); Reina's law is
+a net force and gets compaction only on request (`ReinaForceModel`).
 
 The array interface of the `ForceModel` protocol, ``model(slip, tan_beta, load_n, soil)`` and
 ``model.resistance_n(load_n, soil)`` on arrays of shape (n,) with a `SoilParams` of floats or
@@ -230,20 +231,33 @@ class LinearSlipForceModel(_PatchModel):
 class ReinaForceModel(_PatchModel):
     """Reina's combined longitudinal/lateral model (Reina Eq. 5-9), mu/C/A from the soil.
 
-    The law is `reina.reina_forces`.
+    The law is `reina.reina_forces`. Reina fitted Eq. 5 to the force the test bed's sensor
+    measured at the carriage (Reina §3): the *net* (drawbar) force, with the wheel's motion
+    resistance already inside it. So by default this model adds no Bekker compaction: its
+    resistance is only the rolling term f_r W (`rolling_resistance_coeff`, bearing and
+    hysteresis losses of the vehicle that the test bed's carriage did not see; 0 gives the
+    strictly net law). Adding compaction on top of the net law counts the rut twice (audit in
+    physics-notes §1, defect 1: 46 % slip on flat ground instead of about 1 %).
 
     Parameters
     ----------
     geometry : ContactGeometry
-        Used only for the resistance (Reina's model has no geometry).
+        Used only for the optional compaction (Reina's model has no geometry).
     rolling_resistance_coeff : float
-        As in `JanosiForceModel`.
+        f_r [-] as in `JanosiForceModel`; default 0.01.
     scale_stiffness_with_load : bool
         Reina's C_x, C_y [N] were fitted on one wheel at one load, W_ref
         (`SoilParams.reference_load_n`, 6.6 kg). If True (default) they are scaled by W/W_ref,
         so the traction coefficient F/W is a function of slip alone and a soil fitted on a
         light rover wheel carries over to heavier vehicles; at W = W_ref this is Reina's
         model exactly. If False, C_x and C_y are used as given (Reina Eq. 5-6 verbatim).
+    compaction : bool
+        If True (opt-in), add the Bekker compaction resistance R_c = gamma W^e (`bekker`) as a
+        separate term and use Reina's curve as *gross* thrust: the thrust becomes
+        F_x + R_c (1 - e^{-y}) s/sigma, y = C_x sigma/(mu W) (Eq. 5's own saturation shape,
+        i.e. mu raised to mu + R_c/W), so that thrust minus R_c gives back the measured net
+        curve at high slip and -R_c (a freely rolling wheel cutting a rut) at zero slip.
+        The lateral force stays Eq. 6-9.
 
     Notes
     -----
@@ -253,9 +267,10 @@ class ReinaForceModel(_PatchModel):
     """
 
     def __init__(self, geometry: ContactGeometry, rolling_resistance_coeff: float = 0.01,
-                 scale_stiffness_with_load: bool = True) -> None:
+                 scale_stiffness_with_load: bool = True, compaction: bool = False) -> None:
         super().__init__(geometry, rolling_resistance_coeff)
         self.scale_stiffness_with_load = bool(scale_stiffness_with_load)
+        self.compaction = bool(compaction)
 
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
         mu, c_x, c_y = float(soil.mu), float(soil.c_x_n), float(soil.c_y_n)
@@ -273,9 +288,33 @@ class ReinaForceModel(_PatchModel):
             return fx * load_n, fy * load_n
         return scaled
 
+    def _compaction(self, soil: SoilParams) -> tuple[float, float]:
+        """(gamma, e) of the compaction term: (0, 1) unless ``compaction`` was asked for."""
+        return super()._compaction(soil) if self.compaction else (0.0, 1.0)
+
+    def scalar_kernel(self, soil: SoilParams) -> Kernel:
+        """As `_PatchModel.scalar_kernel`; with ``compaction`` the thrust is the gross one."""
+        kernel = super().scalar_kernel(soil)
+        if not self.compaction:
+            return kernel
+        gamma, exponent = self._compaction(soil)
+        mu, c_x = float(soil.mu), float(soil.c_x_n)
+        w_ref = float(soil.reference_load_n) if self.scale_stiffness_with_load else None
+
+        def gross(slip: float, tan_beta: float, load_n: float) -> tuple[float, float, float]:
+            fx, fy, res = kernel(slip, tan_beta, load_n)
+            sigma = math.hypot(slip, tan_beta)
+            if sigma > 0.0 and gamma:
+                # y = C_x sigma/(mu W); with load scaling C_x = c_x W/W_ref, so W cancels.
+                y = c_x * sigma / (mu * (w_ref if w_ref is not None else load_n))
+                fx += gamma * load_n ** exponent * -math.expm1(-y) * slip / sigma
+            return fx, fy, res
+        return gross
+
     def __repr__(self) -> str:
         return (f"{super().__repr__()[:-1]}, "
-                f"scale_stiffness_with_load={self.scale_stiffness_with_load!r})")
+                f"scale_stiffness_with_load={self.scale_stiffness_with_load!r}, "
+                f"compaction={self.compaction!r})")
 
 
 FORCE_MODELS: Mapping[str, Callable[..., ForceModel]] = MappingProxyType({

@@ -11,7 +11,7 @@ import pytest
 
 from slipenv.controllers import baseline_controller
 from slipenv.evaluation import evaluate_cli
-from slipenv.evaluation.evaluate import evaluate
+from slipenv.evaluation.evaluator import evaluate
 from slipenv.evaluation.trajectory import ape_translation, read_tum
 
 from .conftest import SHORT, TRACKED

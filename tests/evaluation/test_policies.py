@@ -8,7 +8,7 @@ import gymnasium as gym
 import pytest
 from stable_baselines3 import PPO, SAC
 
-from slipenv.evaluation.evaluate import evaluate
+from slipenv.evaluation.evaluator import evaluate
 from slipenv.evaluation.policies import BUILTIN_POLICIES, detect_algo, resolve_policy
 
 from .conftest import SHORT, TRACKED

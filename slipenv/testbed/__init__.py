@@ -1,0 +1,1 @@
+"""A virtual single-wheel test bed (Reina §3), the test-bed CSV format and force-law fitting."""
