@@ -6,9 +6,14 @@
 3. OptiOdom, per session: the same within each recording session.
 4. OptiOdom, across path types: the effect chosen on all runs, fitted on the runs of one path
    type only and scored on the runs of the other types (never used for fitting).
-5. BorealTC (no ground truth): yaw efficiency per terrain (``slipenv.diagnose.proprio``).
+5. OptiOdom, single runs (``--single``): every circle and square run whose nominal dead
+   reckoning drifts more than 3° in heading over the run, diagnosed alone; the model fitted on
+   that one run applied to the *other* sessions' circle runs (whole-run dead reckoning from
+   the first logged pose): the mean cut of their final position error.
+6. BorealTC (no ground truth): yaw efficiency per terrain (``slipenv.diagnose.proprio``).
 
     python benchmarks/real_data.py --out runs/real
+    python benchmarks/real_data.py --out runs/real --single     # only step 5 (about 1 minute)
 """
 
 from __future__ import annotations
@@ -22,9 +27,67 @@ import numpy as np
 
 from slipenv.diagnose import proprio
 from slipenv.diagnose.cli import diagnose, load_logs
+from slipenv.diagnose.extension import parse_model
 from slipenv.diagnose.fit import Problem, fit
 from slipenv.diagnose.replay import build_segments, simulate
+from slipenv.diagnose.segments import cut_spans, log_arrays
 from slipenv.logs.real import convert_real_datasets
+
+DRIFT_DEG = 3.0  # [deg] a run "visibly drifts" beyond this nominal heading error at its end
+
+
+def whole_run(log, model: dict) -> tuple[float, float]:
+    """(heading error [deg], position error [m]) at the end of the run, dead-reckoned whole
+    from its first logged pose with ``model`` (``{}``: nominal)."""
+    arr = log_arrays(log)
+    ok = np.flatnonzero(arr["gt_ok"])
+    seg = cut_spans([arr], [log], [(0, int(ok[0]), int(ok[-1]) + 1)])
+    pred = simulate(seg, model)
+    last = np.flatnonzero(seg.gt_ok[0])[-1]
+    dyaw = (pred[0, last, 2] - seg.gt[0, last, 2] + np.pi) % (2 * np.pi) - np.pi
+    return float(np.degrees(dyaw)), float(np.hypot(*(pred[0, last, :2] - seg.gt[0, last, :2])))
+
+
+def single_runs(logs) -> None:
+    """Step 5: the single-run table and its summary."""
+    info = [log.meta.data["optiodom"] for log in logs]
+    arcs = [(log, i["session"]) for log, i in zip(logs, info, strict=True)
+            if i["path_type"] == "circular"]
+    print("\n| run | nominal heading drift [°] | cause (also) | track_width_m / radii | "
+          "turn scale c_θ | separable | other sessions' circle runs: final position error "
+          "cut |\n|---|---|---|---|---|---|---|")
+    named, total, cuts = 0, 0, []
+    for log, i in zip(logs, info, strict=True):
+        if i["path_type"] not in ("circular", "square"):
+            continue
+        drift = whole_run(log, {})[0]
+        if abs(drift) <= DRIFT_DEG:
+            continue
+        total += 1
+        rep, _ = diagnose([log], i["file"])
+        causes = [rep["cause"], *rep["also"]]
+        geometric = bool({"rolling_radius", "track_width"} & set(causes))
+        named += geometric
+        cal = rep.get("calibration")
+        cut = "–"
+        if cal:
+            model = parse_model(rep).effects
+            others = [lg for lg, sess in arcs if sess != i["session"]]
+            before = [whole_run(lg, {})[1] for lg in others]
+            after = [whole_run(lg, model)[1] for lg in others]
+            rel = 1.0 - np.mean(after) / np.mean(before)
+            cuts.append(rel)
+            cut = f"{1e3 * np.mean(before):.0f} → {1e3 * np.mean(after):.0f} mm ({100 * rel:.0f} %)"
+        params = ", ".join(f"{k} = {v[0]:.4f} ± {v[1]:.4f}" for k, v in rep["parameters"].items())
+        scale = (f"{cal['determined']['turn_scale'][0]:.4f} ± "
+                 f"{cal['determined']['turn_scale'][1]:.4f}" if cal else "–")
+        print(f"| {i['path_type']} {i['session']} run {i['run']} | {drift:+.1f} | "
+              f"{rep['cause']}{' (' + ', '.join(rep['also']) + ')' if rep['also'] else ''} | "
+              f"{params or '–'} | {scale} | {cal['separable'] if cal else '–'} | {cut} |",
+              flush=True)
+    print(f"\n{named}/{total} single runs drifting > {DRIFT_DEG:g}° get a geometric cause; "
+          f"their models cut the other sessions' circle-run final position error by "
+          f"{100 * np.mean(cuts):.0f} % on average (median {100 * np.median(cuts):.0f} %)")
 
 
 def position_rmse(seg, params: dict) -> float:
@@ -52,10 +115,14 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", default="runs/real", help="folder for the converted logs")
+    parser.add_argument("--single", action="store_true", help="only the single-run table")
     args = parser.parse_args(argv)
     out = Path(args.out)
     convert_real_datasets(out, progress=False)
     logs = load_logs(out / "optiodom")
+    if args.single:
+        single_runs(logs)
+        return 0
     report, _ = diagnose(logs, str(out / "optiodom"))
     (out / "optiodom_diagnosis.json").write_text(json.dumps(report, indent=2, default=float))
     g = report["gains"]
@@ -90,6 +157,7 @@ def main(argv: list[str] | None = None) -> int:
             p = ", ".join(f"{k} = {v[0]:.4f} ± {v[1]:.4f}" for k, v in params.items())
             print(f"| {name} | {n_train} | {n_test} | {p} | {1e3 * before:.1f} → "
                   f"{1e3 * after:.1f} ({100 * (1 - after / before):.0f} %) |")
+    single_runs(logs)
     boreal = load_logs(out / "borealtc", require_ground_truth=False)
     result = proprio.analyse(boreal, str(out / "borealtc"))
     (out / "borealtc_diagnosis.json").write_text(json.dumps(result, indent=2, default=float))

@@ -49,7 +49,7 @@ def diagnose(logs: list[Log], where: str, *, progress: bool = False) -> tuple[di
     from slipenv.diagnose.select import select
 
     problem = Problem.from_segments(build_segments(logs))
-    sel = select(problem, progress=progress)
+    sel = select(problem, progress=progress, logs=logs)
     return build_report(sel, problem, logs, where), (sel, problem)
 
 
@@ -85,7 +85,7 @@ def main(args) -> int:
     if args.json:
         rep.write_json(report, args.json)
     if args.report:
-        rep.write_human_report(args.report, report, sel, problem, sim)
+        rep.write_human_report(args.report, report, sel, problem, sim, logs=logs)
     print(summary(report, time.perf_counter() - start))
     return 0
 
@@ -98,6 +98,17 @@ def summary(report: dict, seconds: float | None = None) -> str:
     lines += [f"  {k} = {v[0]:.6g} ± {v[1]:.2g}" for k, v in report["parameters"].items()]
     lines.append(f"held-out {g['metric']}: {g['before']:.4g} -> {g['after']:.4g} "
                  f"({100 * g['relative']:.1f} % better)")
+    cal = report.get("calibration")
+    if cal:
+        ddc = cal["diff_drive_controller"]
+        turn = cal["determined"]["turn_scale"]
+        lines.append(f"odometry config: wheel_radius {ddc['wheel_radius']:.6g} m, "
+                     f"wheel_separation {ddc['wheel_separation']:.6g} m, radius multipliers "
+                     f"L {ddc['left_wheel_radius_multiplier']:.5f} / R "
+                     f"{ddc['right_wheel_radius_multiplier']:.5f}")
+        lines.append(f"  turn scale {turn[0]:.5f} ± {turn[1]:.2g} (determined); "
+                     + ("radius ratio and track width separable on this log" if cal["separable"]
+                        else "radius ratio and track width confounded on this log"))
     if seconds is not None:
         lines.append(f"({report['segments']['count']} segments, {seconds:.1f} s)")
     return "\n".join(lines)

@@ -134,3 +134,42 @@ def pybullet(path: Path, sim: dict) -> Path:
     ax.legend(fontsize=8)
     ax.set_title("PyBullet driven by the logged wheel motion, per segment")
     return _save(fig, path)
+
+
+def dead_reckoning(path: Path, logs: list, fitted) -> Path:
+    """Each log (up to 6) dead-reckoned whole from its first logged pose: logged path, nominal
+    model, and the fitted model ``fitted`` (a ``fit.Fit``; in-sample: fitted on all logs)."""
+    from slipenv.diagnose.segments import cut_spans, log_arrays
+
+    shown = logs[:6]
+    arrays = [log_arrays(log) for log in shown]
+    spans = []
+    for li, arr in enumerate(arrays):
+        ok = np.flatnonzero(arr["gt_ok"])
+        spans.append((li, int(ok[0]), int(ok[-1]) + 1))
+    seg = cut_spans(arrays, shown, spans)
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5.5))
+    nominal, extended = replay.simulate(seg, {}), replay.simulate(seg, fitted.params)
+    for j in range(len(seg)):
+        ok = seg.gt_ok[j]
+        n = np.flatnonzero(ok)[-1] + 1
+        first = j == 0
+        axes[0].plot(seg.gt[j, ok, 0], seg.gt[j, ok, 1], "k-", lw=2, alpha=0.35,
+                     label="logged (ground truth)" if first else None)
+        axes[0].plot(nominal[j, :n, 0], nominal[j, :n, 1], "-", color="tab:red", lw=1,
+                     label="nominal dead reckoning" if first else None)
+        axes[0].plot(extended[j, :n, 0], extended[j, :n, 1], "-", color="tab:green", lw=1,
+                     label=f"calibrated ({'+'.join(fitted.effects)})" if first else None)
+        t = seg.t[j, ok] - seg.t[j, 0]
+        for pred, color in ((nominal, "tab:red"), (extended, "tab:green")):
+            err = replay.heading_residuals(seg, pred[..., 2])[j, ok]
+            axes[1].plot(t, np.degrees(err), color=color, lw=1)
+    axes[0].set_aspect("equal", adjustable="datalim")
+    axes[0].set_xlabel("x [m]")
+    axes[0].set_ylabel("y [m]")
+    axes[0].legend(fontsize=8)
+    axes[0].set_title("whole log from its first logged pose")
+    axes[1].set_xlabel("t [s]")
+    axes[1].set_ylabel("heading error [°] (red nominal, green calibrated)")
+    axes[1].axhline(0.0, color="k", lw=0.5)
+    return _save(fig, path)

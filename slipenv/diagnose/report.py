@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from slipenv.diagnose import geometry, replay
+from slipenv.diagnose import calibration, geometry, replay
 from slipenv.diagnose.effects import effect
 from slipenv.diagnose.fit import Problem
 from slipenv.diagnose.segments import Segments
@@ -53,6 +53,22 @@ def gains(sel: Selection, problem: Problem) -> dict[str, Any]:
                                         "after": a, "relative": 1.0 - a / b if b > 0 else 0.0,
                                         "evaluated_on": "held-out"}
     return out
+
+
+def long_gain(sel: Selection) -> dict[str, Any] | None:
+    """Position RMSE of each half of a single log replayed whole, by the nominal model and
+    by the final model fitted on the other half (the long-horizon route's held-out gain)."""
+    final = sel.final.get("pose")
+    if sel.halves is None or final is None or final.long_half is None:
+        return None
+    ok = sel.halves.seg[-1].gt_ok
+    base = sel.long_baseline["pose"][1].res[-1][..., :2][ok]
+    after = final.long_half.res[-1][..., :2][ok]
+    b = float(np.sqrt(np.mean(np.sum(base**2, axis=-1))))
+    a = float(np.sqrt(np.mean(np.sum(after**2, axis=-1))))
+    return {"metric": "position_rmse_m", "before": b, "after": a,
+            "relative": 1.0 - a / b if b > 0 else 0.0,
+            "evaluated_on": "held-out half of the log replayed whole (fit on the other half)"}
 
 
 def consistency(sel: Selection, problem: Problem) -> dict[str, Any]:
@@ -102,6 +118,12 @@ def build_report(sel: Selection, problem: Problem, logs: list[Log], where: str) 
     chosen = [sel.cause, *sel.also] if sel.cause != "none" else []
     only_gyro = bool(chosen) and all(effect(e).channel == "gyro" for e in chosen)
     gain = dict(g["gyro_heading_rmse_rad"] if only_gyro else g["position_rmse_m"])
+    lg = long_gain(sel)
+    if lg is not None:
+        g["position_rmse_m_long_horizon"] = lg
+        final = sel.final.get("pose")
+        if not only_gyro and final is not None and not final.short_significant:
+            gain = dict(lg)  # found on the long-horizon route: its held-out gain
     candidates = []
     for c in sel.candidates:
         entry: dict[str, Any] = {"cause": c.name}
@@ -111,10 +133,20 @@ def build_report(sel: Selection, problem: Problem, logs: list[Log], where: str) 
             entry.update(score=c.error_ratio, gain_relative=c.gain_relative, p_value=c.p_value,
                          drift=c.drift, significant=c.significant, n_params=c.n_params,
                          channel=c.channel)
+            if c.long is not None:
+                entry["long_horizon"] = {"gain_relative": c.long.gain_relative,
+                                         "p_value": c.long.p_value, "drift": c.long.drift,
+                                         "turn_drift": c.long.turn_drift,
+                                         "significant": c.long_significant}
         candidates.append(entry)
+    covariance = {ch: {"names": f.names, "matrix": f.cov.tolist()}
+                  for ch, f in sel.fits.items()}
+    cal = calibration.calibration(problem, sel.fits.get("pose"))
     return {
         "format": FORMAT, "log": where, "cause": sel.cause, "also": sel.also,
         "parameters": params, "gain": gain, "candidates": candidates,
+        "covariance": covariance,
+        **({"calibration": cal} if cal else {}),
         "effects": per_effect,
         "gains": g,
         "nominal": {"wheel_radius_m": float(np.median(seg.radius)),
@@ -126,6 +158,9 @@ def build_report(sel: Selection, problem: Problem, logs: list[Log], where: str) 
         "consistency": consistency(sel, problem),
         "thresholds": {"alpha": ALPHA, "min_gain": MIN_GAIN, "min_drift": MIN_DRIFT,
                        "n_folds": N_FOLDS},
+        "long_horizon": (None if sel.horizons is None else
+                         {"horizons_s": sel.horizons.lengths_s,
+                          "blocks": int(max(b.max() for b in sel.horizons.block)) + 1}),
         "score": "held-out mean squared error over the nominal model's (lower is better)",
         "logs": [str(log.path) if log.path else "<memory>" for log in logs],
     }
@@ -204,8 +239,9 @@ def _mean(x: np.ndarray) -> float:
 
 
 def write_human_report(folder: str | Path, report: dict, sel: Selection, problem: Problem,
-                       sim_overlay: dict | None = None) -> Path:
-    """Plots and ``report.md`` in ``folder`` (created)."""
+                       sim_overlay: dict | None = None, logs: list[Log] | None = None) -> Path:
+    """Plots and ``report.md`` in ``folder`` (created); with ``logs``, the whole-log dead
+    reckoning before/after (``dead_reckoning.png``)."""
     from slipenv.diagnose import plots
 
     folder = Path(folder)
@@ -214,6 +250,9 @@ def write_human_report(folder: str | Path, report: dict, sel: Selection, problem
             "residuals_time": plots.residuals_time(folder / "residuals_time.png", sel, problem),
             "regressors": plots.regressors(folder / "regressors.png", window_residuals(problem)),
             "candidates": plots.candidates(folder / "candidates.png", sel)}
+    if logs and "pose" in sel.fits and sel.fits["pose"].effects:
+        figs["dead_reckoning"] = plots.dead_reckoning(folder / "dead_reckoning.png", logs,
+                                                      sel.fits["pose"])
     if sim_overlay:
         figs["pybullet"] = plots.pybullet(folder / "pybullet.png", sim_overlay)
     (folder / "report.md").write_text(markdown(report, figs, sim_overlay), encoding="utf-8")
@@ -235,6 +274,8 @@ def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
         lines += ["| parameter | value | standard error |", "|---|---|---|"]
         lines += [f"| `{k}` | {v[0]:.6g} | {v[1]:.2g} |" for k, v in report["parameters"].items()]
         lines += [""]
+    if report.get("calibration"):
+        lines += calibration.markdown(report["calibration"])
     lines += [f"Held-out {g['metric']}: **{g['before']:.4g} → {g['after']:.4g}** "
               f"({100 * g['relative']:.1f} % better), each segment predicted by a model "
               "fitted without it.", ""]
@@ -242,19 +283,28 @@ def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
     lines += [f"{seg['count']} segments of about {seg['duration_s']:.1f} s, each replayed from "
               f"the logged pose at its start; {seg['folds']} folds ({seg['fold_by']}).", "",
               "## Candidates", "",
-              "| effect | held-out error ratio | gain | p | drift | significant |",
-              "|---|---|---|---|---|---|"]
+              "| effect | held-out error ratio | gain | p | drift | long-horizon gain, p, drift "
+              "| significant |",
+              "|---|---|---|---|---|---|---|"]
     for c in report["candidates"]:
         if c.get("untestable"):
-            lines.append(f"| {c['cause']} | – | – | – | – | not testable: {c['untestable']} |")
+            lines.append(f"| {c['cause']} | – | – | – | – | – | not testable: "
+                         f"{c['untestable']} |")
         else:
+            lh = c.get("long_horizon")
+            long = (f"{100 * lh['gain_relative']:.0f} %, {lh['p_value']:.2g}, "
+                    f"{max(lh['drift'], lh['turn_drift']):.4f}" if lh else "–")
             lines.append(f"| {c['cause']} | {c['score']:.3f} | {100 * c['gain_relative']:.0f} % "
-                         f"| {c['p_value']:.2g} | {c['drift']:.4f} | "
+                         f"| {c['p_value']:.2g} | {c['drift']:.4f} | {long} | "
                          f"{'yes' if c['significant'] else 'no'} |")
     t = report["thresholds"]
     lines += ["", f"Significant = one-sided paired sign-flip p < {t['alpha']}, held-out mean "
               f"squared error down by ≥ {100 * t['min_gain']:.0f} %, and a material drift "
-              f"(≥ {100 * t['min_drift']:.1f} % of the distance a segment covers).", "",
+              f"(≥ {100 * t['min_drift']:.1f} % of the distance a segment covers) — either on the "
+              "short segments, or on the long-horizon route: the log cut into blocks in time, "
+              "each replayed whole by a model fitted without it (sign-flip test over blocks of "
+              "the held-out score), gain and drift read on one half of the log replayed whole "
+              "by a model fitted on the other.", "",
               "## Consistency of the segment-end residuals", "",
               "| model | time-averaged NIS | 95 % band | lag-1 autocorrelation | band |",
               "|---|---|---|---|---|"]
@@ -269,6 +319,8 @@ def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
                 "residuals_time": "held-out position and heading error over time",
                 "regressors": "nominal residuals per 0.5 s window against candidate regressors",
                 "candidates": "held-out error of every effect relative to the nominal model",
+                "dead_reckoning": "whole-log dead reckoning from the first logged pose, nominal "
+                                  "and with the fitted model (fitted on the whole log)",
                 "pybullet": "PyBullet replay (physics, logged wheel motion) before/after"}
     lines += [f"- `{p.name}` — {captions[k]}" for k, p in figs.items()]
     if sim:

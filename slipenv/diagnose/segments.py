@@ -127,6 +127,16 @@ def cut(arrays: list[dict], logs: list[Log], seg_s: float) -> Segments | None:
     return _assemble(pieces, logs) if pieces else None
 
 
+def cut_spans(arrays: list[dict], logs: list[Log], spans: list[tuple[int, int, int]]
+              ) -> Segments | None:
+    """Segments at explicit spans ``(log index, start, stop)`` (half-open sample ranges, any
+    lengths: padded to the longest); spans with fewer than ``MIN_SEGMENT_SAMPLES`` samples or
+    fewer than two ground-truth samples are dropped. None when none is left."""
+    pieces = [(li, a, b, arrays[li]) for li, a, b in spans
+              if b - a >= MIN_SEGMENT_SAMPLES and arrays[li]["gt_ok"][a:b].sum() >= 2]
+    return _assemble(pieces, logs) if pieces else None
+
+
 def _pieces(arrays: list[dict], logs: list[Log], seg_s: float) -> list[tuple]:
     out = []
     for li, (log, arr) in enumerate(zip(logs, arrays, strict=True)):

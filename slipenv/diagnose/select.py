@@ -17,13 +17,22 @@ An effect is *significant* when all three hold:
   tyre scrub in turns. Drifts below half a percent of the distance are below what odometry
   calibration resolves and do not count as a cause.
 
+**Long-horizon route** (``horizon.py``, when ``select`` is given the logs): a slow drift
+(a 1 % track-width error on one log of a few minutes) is invisible over a few seconds, so the
+same three tests are also made on held-out blocks in time replayed whole (p: held-out score
+tests over blocks and along the whitened run; gain and drift: one half of the log replayed
+whole by a model fitted on the other half). An effect is significant when it passes on
+either route; which route is reported per candidate (``long_horizon`` in the JSON).
+
 On a log the nominal model explains, an extension fitted on other segments predicts held-out
 segments slightly *worse* (it fitted noise), so the tests fail and the answer is ``none``.
 Among significant effects the cause is the one with the lowest held-out error, except that a
 candidate with fewer parameters that is not significantly worse (and within ``TIE_RATIO`` of
 the best) is preferred: parsimony, so that a track-width change is not
-called turning slip. Further effects are added one at a time ("also") while the joint model
-passes the same three tests against the current one.
+called turning slip. Further effects are added one at a time ("also", forward selection over
+every testable effect that helps alone on either route) while the joint model passes the same
+three tests against the current one; the joint model is then fitted on all segments, its
+parameters reported with their joint covariance.
 """
 
 from __future__ import annotations
@@ -34,10 +43,10 @@ import numpy as np
 from scipy import stats
 from tqdm import tqdm
 
-from slipenv.diagnose import replay
+from slipenv.diagnose import horizon, replay
 from slipenv.diagnose.effects import EFFECTS, effect
 from slipenv.diagnose.fit import Fit, Problem, fit, param_count
-from slipenv.diagnose.segments import Segments
+from slipenv.diagnose.segments import Segments, log_arrays
 
 ALPHA = 0.01  # one-sided p-value an effect must beat
 MIN_GAIN = 0.2  # relative fall of the held-out mean squared error an effect must reach
@@ -69,6 +78,10 @@ class Candidate:
     significant: bool = False
     untestable: str | None = None
     fold_fits: list[Fit] = field(default_factory=list)
+    short_significant: bool = False
+    long: horizon.LongScore | None = None
+    long_significant: bool = False
+    long_half: horizon.Replays | None = None
 
     @property
     def name(self) -> str:
@@ -86,6 +99,9 @@ class Selection:
     final: dict[str, Candidate]
     fits: dict[str, Fit]
     folds: np.ndarray
+    horizons: horizon.Horizons | None = None
+    halves: horizon.Horizons | None = None
+    long_baseline: dict[str, tuple] = field(default_factory=dict)
 
 
 def make_folds(seg: Segments) -> np.ndarray:
@@ -161,8 +177,36 @@ def _judge(problem: Problem, cand: Candidate, reference: np.ndarray) -> None:
     else:
         cand.drift = fall / problem.travel_m
         cand.material = cand.drift >= MIN_DRIFT
-    cand.significant = (cand.p_value < ALPHA and cand.gain_relative >= MIN_GAIN
-                        and cand.material)
+    cand.short_significant = (cand.p_value < ALPHA and cand.gain_relative >= MIN_GAIN
+                              and cand.material)
+    cand.significant = cand.short_significant or cand.long_significant
+
+
+def _judge_long(problem: Problem, hz: tuple | None, cand: Candidate,
+                reference: tuple[horizon.Replays, horizon.Replays | None] | None) -> None:
+    """The long-horizon route (``horizon.py``): the same three tests on the held-out blocks
+    replayed at horizons up to the whole block (``hz``: the blocks, and the two halves of a
+    single log for the gain and drift; ``reference``: their replays by the reference)."""
+    if hz is None or reference is None:
+        return
+    blocks, halves = hz
+    replays = horizon.held_out(problem, blocks, cand.effects, cand.channel)
+    half = (None if halves is None else
+            (horizon.held_out(problem, halves, cand.effects, cand.channel), reference[1],
+             halves))
+    cand.long = horizon.judge(problem, blocks, replays, reference[0], cand.channel, half)
+    cand.long_half = None if half is None else half[0]
+    material = MIN_GYRO_DRIFT_RAD_S if cand.channel == "gyro" else MIN_DRIFT
+    drift = max(cand.long.drift, cand.long.turn_drift)
+    cand.long_significant = (cand.long.p_value < ALPHA and cand.long.gain_relative >= MIN_GAIN
+                             and drift >= material)
+    cand.significant = cand.short_significant or cand.long_significant
+
+
+def _long_ratio(cand: Candidate, base: tuple) -> float:
+    """Horizon-averaged held-out error over the nominal model's (long route, blocks)."""
+    return float(np.mean(cand.long.errors.sum(axis=0)
+                         / np.maximum(base[0].errors.sum(axis=0), 1e-300)))
 
 
 def _same_mechanism(name: str, chosen: tuple[str, ...]) -> bool:
@@ -188,12 +232,46 @@ def _pick(significant: list[Candidate]) -> Candidate:
     return best
 
 
-def select(problem: Problem, progress: bool = False) -> Selection:
-    """Compare every applicable effect on held-out segments and name the cause."""
+def _pick_long(significant: list[Candidate], base: tuple) -> Candidate:
+    """As :func:`_pick`, on the long-horizon scores (fold-level t-test for "not worse")."""
+    best = min(significant, key=lambda c: _long_ratio(c, base))
+    order = list(EFFECTS)
+    for cand in sorted(significant, key=lambda c: (c.n_params, order.index(c.effects[0]))):
+        if cand is best:
+            return best
+        worse = horizon.judge_pair(cand.long.errors, best.long.errors)
+        if worse >= ALPHA and _long_ratio(cand, base) <= TIE_RATIO * _long_ratio(best, base):
+            return cand
+    return best
+
+
+def _choose(sig: list[Candidate], long_base: tuple | None) -> Candidate:
+    """The short-segment pick when some effect passes there, else the long-horizon pick."""
+    short = [c for c in sig if c.short_significant]
+    return _pick(short) if short or long_base is None else _pick_long(sig, long_base)
+
+
+def select(problem: Problem, progress: bool = False, logs: list | None = None) -> Selection:
+    """Compare every applicable effect on held-out segments and name the cause.
+
+    With ``logs`` (those ``problem`` was cut from), every effect is also compared on
+    held-out blocks replayed at long horizons (``horizon.py``); an effect counts when it
+    passes the tests on either route.
+    """
     seg = problem.seg
     folds = make_folds(seg)
     channels = ["pose"] + (["gyro"] if seg.gyro is not None else [])
     baseline = {ch: cross_validate(problem, (), folds, ch) for ch in channels}
+    hz = None
+    if logs:
+        arrays = [log_arrays(log) for log in logs]
+        blocks = horizon.build(problem, arrays, logs, N_FOLDS)
+        halves = (horizon.build(problem, arrays, logs, N_FOLDS, 2, 2) if len(logs) == 1
+                  else None)
+        hz = None if blocks is None else (blocks, halves)
+    long_base = ({ch: (horizon.held_out(problem, hz[0], (), ch),
+                       None if hz[1] is None else horizon.held_out(problem, hz[1], (), ch))
+                  for ch in channels} if hz is not None else {})
     names = list(EFFECTS)
     candidates: list[Candidate] = []
     for name in tqdm(names, desc="fitting effects", unit="effect", disable=not progress):
@@ -202,6 +280,7 @@ def select(problem: Problem, progress: bool = False) -> Selection:
             candidates.append(Candidate((name,), effect(name).channel, untestable=why))
             continue
         cand = cross_validate(problem, (name,), folds)
+        _judge_long(problem, hz, cand, long_base.get(cand.channel))
         _judge(problem, cand, baseline[cand.channel].errors)
         candidates.append(cand)
     final: dict[str, Candidate] = {}
@@ -209,19 +288,27 @@ def select(problem: Problem, progress: bool = False) -> Selection:
         sig = [c for c in candidates if c.channel == ch and c.significant]
         if not sig:
             continue
-        current = _pick(sig)
-        rest = [c.effects[0] for c in sig if c.effects[0] not in current.effects]
-        rest = [r for r in rest if not _same_mechanism(r, current.effects)]
+        current = _choose(sig, long_base.get(ch))
+        # forward selection over every testable effect that helps alone on either route (an
+        # effect masked by the cause, not significant alone, may pass once the cause is in)
+        rest = [c.effects[0] for c in candidates if c.channel == ch and not c.untestable
+                and (c.gain_relative > 0 or (c.long is not None and c.long.gain_relative > 0))]
+        rest = [r for r in rest if r not in current.effects
+                and not _same_mechanism(r, current.effects)]
         while rest:
             trials = []
             for name in rest:
                 joint = cross_validate(problem, (*current.effects, name), folds)
                 _judge(problem, joint, current.errors)
+                if not joint.short_significant:  # the long route only where needed (cost)
+                    _judge_long(problem, hz, joint, None if current.long is None
+                                else (current.long.replays, current.long_half))
                 if joint.significant:
                     trials.append(joint)
             if not trials:
                 break
-            current = min(trials, key=lambda c: c.errors.sum())
+            current = _choose(trials, long_base.get(ch))
+            _judge_long(problem, hz, current, long_base.get(ch))
             _judge(problem, current, baseline[ch].errors)
             rest = [r for r in rest if r not in current.effects
                     and not _same_mechanism(r, current.effects)]
@@ -233,4 +320,6 @@ def select(problem: Problem, progress: bool = False) -> Selection:
                                                c.effects[0] not in chosen[:1],
                                                not c.significant, c.error_ratio))
     return Selection(cause=chosen[0] if chosen else "none", also=chosen[1:],
-                     candidates=ranked, baseline=baseline, final=final, fits=fits, folds=folds)
+                     candidates=ranked, baseline=baseline, final=final, fits=fits, folds=folds,
+                     horizons=None if hz is None else hz[0],
+                     halves=None if hz is None else hz[1], long_baseline=long_base)

@@ -46,7 +46,7 @@ class Diagnosed:
             self.synth = synth.generate(seed + SEED_SHIFT, effect, kind, duration_s=DURATION_S)
             self.seg = build_segments([self.synth.log])
             self.problem = Problem.from_segments(self.seg)
-            self.selection = select(self.problem)
+            self.selection = select(self.problem, logs=[self.synth.log])
 
     def parameters(self) -> dict[str, list[float]]:
         out: dict[str, list[float]] = {}

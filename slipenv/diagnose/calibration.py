@@ -1,0 +1,151 @@
+"""Odometry calibration from a geometric diagnosis: the values a robot's config takes.
+
+When the diagnosis names ``rolling_radius`` and/or ``track_width``, the fitted geometry is
+also given as a differential-drive controller takes it (ROS ``diff_drive_controller``:
+``wheel_radius``, ``wheel_separation``, ``left/right_wheel_radius_multiplier``), with standard
+errors from the fit's covariance (delta method).
+
+What one log can separate. The heading rate of the replay is (r_R Δφ_R - r_L Δφ_L)/W: on a
+log whose turns all have the same wheel-speed ratio (a circle driven one way) the left/right
+radius ratio and the track width change it in the same way and cannot be told apart; only
+the *turn scale* c_θ (the factor the fitted geometry puts on the nominal turn of this log)
+and the *distance scale* c_d are determined. Here the joint fit of radii and width is made:
+its variance inflation of the width, VIF = (se joint / se alone)², says whether the log
+separates them (VIF < ``MAX_VIF``); either way c_θ and c_d are reported with their standard
+errors, which stay small when the split does not.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from slipenv.diagnose.fit import Fit, Problem, fit
+
+GEOMETRIC = ("rolling_radius", "track_width")
+MAX_VIF = 25.0  # variance inflation above which radii ratio and width are called confounded
+
+
+def _geometry(f: Fit, seg) -> tuple[np.ndarray, np.ndarray]:
+    """(r_L, r_R, W) of a fit (nominal where it fits no such effect) and their covariance."""
+    r0, w0 = float(np.median(seg.radius)), float(np.median(seg.track))
+    keys = ("rolling_radius.left_m", "rolling_radius.right_m", "track_width.width_m")
+    values = np.array([r0, r0, w0])
+    index = []
+    for k, key in enumerate(keys):
+        if key in f.names:
+            values[k] = f.x[f.names.index(key)]
+            index.append((k, f.names.index(key)))
+    cov = np.zeros((3, 3))
+    for a, i in index:
+        for b, j in index:
+            cov[a, b] = f.cov[i, j]
+    return values, cov
+
+
+def _scales(theta: np.ndarray, seg) -> np.ndarray:
+    """(c_θ, c_d): the fitted geometry's turn and distance over the nominal's, on this log."""
+    r0, w0 = float(np.median(seg.radius)), float(np.median(seg.track))
+    left = seg.dphi[..., seg.sides == 0].mean(axis=-1)
+    right = seg.dphi[..., seg.sides == 1].mean(axis=-1)
+    turn0 = np.abs(r0 * (right - left) / w0).sum()
+    dist0 = np.abs(0.5 * r0 * (right + left)).sum()
+    r_l, r_r, w = theta
+    sign = np.sign(right - left)
+    turn = (sign * (r_r * right - r_l * left) / w).sum()
+    dist = (np.sign(right + left) * 0.5 * (r_r * right + r_l * left)).sum()
+    return np.array([turn / max(turn0, 1e-12), dist / max(dist0, 1e-12)])
+
+
+def _delta_se(func, theta: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    """Standard errors of ``func(theta)`` by the delta method (central differences)."""
+    base = func(theta)
+    jac = np.zeros((base.size, theta.size))
+    for k in range(theta.size):
+        h = 1e-6 * max(abs(theta[k]), 1e-6)
+        up, down = theta.copy(), theta.copy()
+        up[k] += h
+        down[k] -= h
+        jac[:, k] = (func(up) - func(down)) / (2 * h)
+    return np.sqrt(np.maximum(np.diag(jac @ cov @ jac.T), 0.0))
+
+
+def calibration(problem: Problem, chosen: Fit | None) -> dict[str, Any] | None:
+    """The calibration block of the report, or None unless ``chosen`` has a geometric effect.
+
+    Parameters
+    ----------
+    problem : Problem
+    chosen : Fit
+        The pose channel's final model fitted on all segments.
+    """
+    if chosen is None or not set(GEOMETRIC) & set(chosen.effects):
+        return None
+    seg = problem.seg
+    theta, cov = _geometry(chosen, seg)
+    se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    r_mean = 0.5 * (theta[0] + theta[1])
+    se_mean = 0.5 * float(np.sqrt(cov[0, 0] + cov[1, 1] + 2 * cov[0, 1]))
+    scales = _scales(theta, seg)
+    scales_se = _delta_se(lambda th: _scales(th, seg), theta, cov)
+    joint = fit(problem, GEOMETRIC)
+    alone = fit(problem, ("track_width",))
+    var_alone = float(alone.cov[0, 0])
+    vif = float(joint.cov[2, 2] / var_alone) if var_alone > 0 else float("inf")
+    separable = vif < MAX_VIF
+    ratio = theta[1] / theta[0]
+    ratio_se = float(_delta_se(lambda th: np.array([th[1] / th[0]]), theta, cov)[0])
+    note = ("this log separates the wheel-radius ratio from the track width "
+            f"(variance inflation {vif:.1f})" if separable else
+            "on this log the left/right wheel-radius ratio and the track width are confounded "
+            f"(variance inflation {vif:.0f} of the width when both are fitted: its turns all "
+            "have about the same wheel-speed ratio); the split between them is not determined, "
+            "only the turn scale and distance scale are — drive turns both ways, or straight "
+            "runs, to separate them")
+    return {
+        "diff_drive_controller": {
+            "wheel_radius": float(r_mean), "wheel_separation": float(theta[2]),
+            "left_wheel_radius_multiplier": float(theta[0] / r_mean),
+            "right_wheel_radius_multiplier": float(theta[1] / r_mean),
+            "wheel_separation_multiplier": 1.0,
+        },
+        "wheel_radius_m": [float(r_mean), se_mean],
+        "wheel_separation_m": [float(theta[2]), float(se[2])],
+        "left_wheel_radius_m": [float(theta[0]), float(se[0])],
+        "right_wheel_radius_m": [float(theta[1]), float(se[1])],
+        "right_left_radius_ratio": [float(ratio), ratio_se],
+        "nominal": {"wheel_radius_m": float(np.median(seg.radius)),
+                    "wheel_separation_m": float(np.median(seg.track))},
+        "determined": {"turn_scale": [float(scales[0]), float(scales_se[0])],
+                       "distance_scale": [float(scales[1]), float(scales_se[1])]},
+        "separable": bool(separable), "variance_inflation": vif, "note": note,
+        "fitted_effects": list(chosen.effects),
+    }
+
+
+def markdown(cal: dict[str, Any]) -> list[str]:
+    """Lines of the human report's calibration section."""
+    ddc = cal["diff_drive_controller"]
+    nom = cal["nominal"]
+    det = cal["determined"]
+    return [
+        "## Odometry calibration", "",
+        "Values for a differential-drive controller's config (ROS `diff_drive_controller`):",
+        "", "```yaml",
+        f"wheel_radius: {ddc['wheel_radius']:.6f}        # nominal {nom['wheel_radius_m']:.6f}",
+        f"wheel_separation: {ddc['wheel_separation']:.6f}    # nominal "
+        f"{nom['wheel_separation_m']:.6f}",
+        f"left_wheel_radius_multiplier: {ddc['left_wheel_radius_multiplier']:.6f}",
+        f"right_wheel_radius_multiplier: {ddc['right_wheel_radius_multiplier']:.6f}",
+        "wheel_separation_multiplier: 1.0", "```", "",
+        "| quantity | value | standard error |", "|---|---|---|",
+        *[f"| {k} | {cal[k][0]:.6g} | {cal[k][1]:.2g} |" for k in
+          ("wheel_radius_m", "wheel_separation_m", "left_wheel_radius_m", "right_wheel_radius_m",
+           "right_left_radius_ratio")],
+        f"| turn scale c_θ (determined) | {det['turn_scale'][0]:.5f} | "
+        f"{det['turn_scale'][1]:.2g} |",
+        f"| distance scale c_d (determined) | {det['distance_scale'][0]:.5f} | "
+        f"{det['distance_scale'][1]:.2g} |", "",
+        f"What this log separates: {cal['note']}.", "",
+    ]

@@ -1,0 +1,316 @@
+"""Long-horizon held-out comparison: blocked cross-validation in time, horizons of many lengths.
+
+The segment comparison of ``select.py`` re-anchors every few seconds on the ground truth, so a
+slow drift (a 1 % track-width error turning a circle leaves 0.2° per 3 s segment) hides in the
+noise of each segment, and its gain looks immaterial over a few seconds. Here:
+
+- **Blocks.** A single log is cut into ``N_BLOCKS`` contiguous blocks in time (several logs:
+  every log is a block, folds as in ``select.make_folds``). For every fold the effects are
+  fitted on the other folds' blocks, each replayed whole (a slow drift is estimated from the
+  horizon it shows on), and the held-out blocks are replayed at horizons of several lengths:
+  the segment length, doubled until it reaches the block, and the whole block (from the
+  logged pose at its start only).
+- **Halves.** A single log is also cut in two: fit on one half replayed whole, replay the
+  other half whole. The gain and the material drift are read there, on the longest horizon a
+  single log offers: 1 - E/E⁰ of the held-out mean squared errors, RMS fall × √3 / distance
+  covered as in ``select.py``, and for the heading also per angle turned (a 1 % track-width
+  error is a 1 % error of every turn, whatever the distance between turns).
+- **p.** Errors along one run are correlated (a replay's error integrates the noise), so
+  samples of one replay are not independent evidence. Two held-out score tests, each
+  asking whether the reference's residual r points along the correction c = r - r' the
+  extension predicts (with no effect, c comes from a fit on other data and is independent of
+  the noise in r): a sign-flip test over the blocks (:func:`judge`; exact, but a few turns
+  give few informative blocks), and a test on the halves' residuals whitened along the run
+  (:func:`whitened_score`: differenced, AR(1)-filtered, variance by batch means). The
+  smaller p, doubled (Bonferroni), is the route's p.
+
+``select.py`` applies its three tests (p < α, gain, material drift) to these numbers as a
+second route: an effect counts when it passes on the short segments or here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats
+
+from slipenv.diagnose.fit import Problem, fit
+from slipenv.diagnose.segments import Segments, cut_spans
+
+N_BLOCKS = 10  # blocks in time of a single log (folds of the blocked cross-validation)
+MIN_BLOCKS = 3  # folds needed for a t-test with at least two degrees of freedom
+WHITEN_BATCH_S = 2.0  # [s] batches of the whitened score's variance
+
+
+@dataclass
+class Horizons:
+    """Held-out blocks replayed at several horizons.
+
+    Attributes
+    ----------
+    seg : list of Segments
+        One per horizon, shortest first (the last is the whole blocks).
+    fold : list of ndarray
+        Fold of each segment of each horizon.
+    block : list of ndarray
+        Block of each segment of each horizon.
+    lengths_s : list of float
+        Horizon lengths [s].
+    """
+
+    seg: list[Segments]
+    fold: list[np.ndarray]
+    block: list[np.ndarray]
+    lengths_s: list[float]
+
+    @property
+    def folds(self) -> np.ndarray:
+        return np.unique(np.concatenate(self.fold))
+
+
+@dataclass
+class Replays:
+    """Held-out replays of the blocks at every horizon by one model (fitted per fold)."""
+
+    res: list[np.ndarray]  # per horizon: residuals (S_h, L_h, k), heading scaled by ℓ
+    errors: np.ndarray  # (F, H) mean squared residual per fold and horizon
+    models: list = field(default_factory=list)  # fitted model of each fold
+
+
+@dataclass
+class LongScore:
+    """An effect (set) scored on the held-out blocks against a reference model."""
+
+    replays: Replays
+    gain_relative: float = 0.0
+    p_value: float = 1.0  # sign-flip test of the block scores
+    drift: float = 0.0
+    turn_drift: float = 0.0  # heading RMS fall × √3 / angle turned [-] (pose channel)
+
+    @property
+    def errors(self) -> np.ndarray:
+        return self.replays.errors
+
+
+def _spans(t: np.ndarray, ok: np.ndarray, a: int, b: int, length_s: float | None) -> list:
+    """Windows of ``length_s`` [s] tiling samples [a, b), each starting on ground truth; the
+    whole range when ``length_s`` is None."""
+    good = np.flatnonzero(ok[a:b]) + a
+    if good.size < 2:
+        return []
+    if length_s is None:
+        return [(int(good[0]), int(good[-1]) + 1)]
+    out, i = [], int(good[0])
+    while True:
+        j = int(np.searchsorted(t, t[i] + length_s - 1e-9))
+        if j >= b:
+            break
+        out.append((i, j + 1))
+        nxt = good[good >= j]
+        if nxt.size == 0:
+            break
+        i = int(nxt[0])
+    return out
+
+
+def blocks(arrays: list[dict], n_folds: int, n_blocks: int = N_BLOCKS
+           ) -> list[tuple[int, int, int, int]]:
+    """``(fold, log, start, stop)`` of the held-out blocks: ``n_blocks`` in time of a single
+    log, else one per log with fold = log index mod ``n_folds``."""
+    n_logs = len(arrays)
+    if n_logs >= 2:
+        k = min(n_folds, n_logs)
+        return [(li % k, li, 0, len(arr["t"])) for li, arr in enumerate(arrays)]
+    n = len(arrays[0]["t"])
+    edges = np.linspace(0, n, n_blocks + 1).round().astype(int)
+    return [(k, 0, int(edges[k]), int(edges[k + 1])) for k in range(n_blocks)]
+
+
+def build(problem: Problem, arrays: list[dict], logs: list, n_folds: int,
+          n_blocks: int = N_BLOCKS, min_folds: int = MIN_BLOCKS) -> Horizons | None:
+    """The horizons of ``problem``'s logs (their ``segments.log_arrays``); None when the logs
+    allow no blocked test."""
+    seg = problem.seg
+    parts = blocks(arrays, n_folds, n_blocks)
+    if len({f for f, *_ in parts}) < min_folds:
+        return None
+    base = float(np.median(seg.t[:, -1] - seg.t[:, 0]))
+    block_s = min(float(arrays[li]["t"][b - 1] - arrays[li]["t"][a]) for _, li, a, b in parts)
+    lengths: list[float | None] = []
+    h = base
+    while h < 0.75 * block_s:
+        lengths.append(h)
+        h *= 2.0
+    lengths.append(None)
+    out_seg, out_fold, out_block, out_len = [], [], [], []
+    for length in lengths:
+        spans, folds, ids = [], [], []
+        for k, (f, li, a, b) in enumerate(parts):
+            arr = arrays[li]
+            for s, e in _spans(arr["t"], arr["gt_ok"], a, b, length):
+                spans.append((li, s, e))
+                folds.append(f)
+                ids.append(k)
+        cut = cut_spans(arrays, logs, spans)
+        if cut is None or len(cut) != len(spans):
+            return None
+        out_seg.append(cut)
+        out_fold.append(np.array(folds))
+        out_block.append(np.array(ids))
+        out_len.append(block_s if length is None else length)
+    return Horizons(out_seg, out_fold, out_block, out_len)
+
+
+def held_out(problem: Problem, hz: Horizons, effects: tuple[str, ...],
+             channel: str) -> Replays:
+    """Held-out replays of the blocks by ``effects``, fitted on each fold's training part."""
+    folds = hz.folds
+    res = [np.zeros(seg.gt.shape[:2] + ((1,) if channel == "gyro" else (3,)))
+           for seg in hz.seg]
+    errors = np.zeros((len(folds), len(hz.seg)))
+    models = []
+    for i, f in enumerate(folds):
+        model = {}
+        if effects:
+            # fitted on the other folds' blocks replayed whole: a slow drift is estimated
+            # from the horizon it shows on, not from re-anchored pieces of it
+            whole, others = hz.seg[-1], np.flatnonzero(hz.fold[-1] != f)
+            train = Problem(whole.take(others), problem.heading_scale_m, problem.travel_m)
+            model = fit(train, effects).params
+        models.append(model)
+        for h, (seg, fold) in enumerate(zip(hz.seg, hz.fold, strict=True)):
+            idx = np.flatnonzero(fold == f)
+            if idx.size:
+                part = seg.take(idx)
+                res[h][idx] = problem.residuals(effects, model, part, channel)
+                count = np.maximum(part.gt_ok.sum(axis=1), 1)
+                errors[i, h] = float(np.mean((res[h][idx] ** 2).sum(axis=(1, 2)) / count))
+    return Replays(res, errors, models)
+
+
+def judge(problem: Problem, hz: Horizons, cand: Replays, reference: Replays,
+          channel: str, halves: tuple[Replays, Replays, Horizons] | None = None) -> LongScore:
+    """Gain, p and material drift of ``cand`` against ``reference`` on the held-out blocks.
+
+    Gain and drift are read on the whole-block horizon of ``halves`` (``cand`` and
+    ``reference`` replayed on a log cut in two: fit on one half, replay the other whole),
+    else of ``hz``: a slow drift is material over a long run, not over a tenth of it.
+
+    p: per block b and horizon h the score a_bh = Σ over its spans of the mean r · c, with r
+    the reference's residual and c = r - r' the correction the candidate predicts (a held-out
+    score test: with no effect, c was fitted on other blocks and is independent of the noise
+    in r, so a_bh is centred on 0; with it, r holds the drift c predicts). Each horizon is
+    scaled by its root-mean-square score and summed, a_b = Σ_h a_bh / rms_b(a_bh), and the
+    one-sided sign-flip test over the blocks (independent replays; exact for symmetric noise)
+    gives p. Weighing by r · c instead of comparing squared errors keeps the power a weak
+    drift would lose to the noise of two squared errors (2 r · c - |c|² is what they test).
+    """
+    score = LongScore(cand)
+    n_blocks = int(max(b.max() for b in hz.block)) + 1
+    total = np.zeros(n_blocks)
+    for h, (seg, block) in enumerate(zip(hz.seg, hz.block, strict=True)):
+        r, r1 = reference.res[h], cand.res[h]
+        count = np.maximum(seg.gt_ok.sum(axis=1), 1)
+        dot = np.sum(r * (r - r1), axis=(1, 2)) / count
+        rr = np.sum(r * r, axis=(1, 2)) / count
+        cc = np.sum((r - r1) ** 2, axis=(1, 2)) / count
+        num = np.bincount(block, weights=dot, minlength=n_blocks)
+        den = np.sqrt(np.bincount(block, weights=rr, minlength=n_blocks))
+        a = np.divide(num, den, out=np.zeros(n_blocks), where=den > 0)
+        size = float(np.sqrt(np.mean(np.bincount(block, weights=cc, minlength=n_blocks))))
+        if size > 0:
+            total += a / size
+    score.p_value = sign_flip(total)
+    if halves is not None:
+        cand, reference, hz = halves
+    # Bonferroni over the two tests of the same hypothesis
+    score.p_value = min(1.0, 2.0 * min(score.p_value, whitened_score(hz, cand, reference)))
+    e, e0 = cand.errors, reference.errors
+    score.gain_relative = float(1.0 - e[:, -1].sum() / max(float(e0[:, -1].sum()), 1e-300))
+    longest = hz.seg[-1]
+    fall = np.sqrt(3.0) * (np.sqrt(e0[:, -1].mean()) - np.sqrt(e[:, -1].mean()))
+    if channel == "gyro":  # heading drift rate [rad/s], as in select.py
+        score.drift = float(fall / problem.heading_scale_m / max(hz.lengths_s[-1], 1e-9))
+    else:
+        travel = np.abs(longest.dphi * longest.radius[:, None, :]).mean(axis=-1).sum(axis=1)
+        score.drift = float(fall / max(float(np.median(travel)), 1e-9))
+        d = longest.radius[:, None, :] * longest.dphi
+        left = d[..., longest.sides == 0].mean(axis=-1)
+        right = d[..., longest.sides == 1].mean(axis=-1)
+        turned = np.abs((right - left) / longest.track[:, None]).sum(axis=1)
+        ok = longest.gt_ok
+        yaw0 = reference.res[-1][..., 2][ok] / problem.heading_scale_m
+        yaw1 = cand.res[-1][..., 2][ok] / problem.heading_scale_m
+        turn_fall = np.sqrt(3.0) * (np.sqrt(np.mean(yaw0**2)) - np.sqrt(np.mean(yaw1**2)))
+        score.turn_drift = float(turn_fall / max(float(np.median(turned)), 1e-9))
+    return score
+
+
+def sign_flip(values: np.ndarray) -> float:
+    """One-sided p of a sign-flip test that ``values`` are centred above 0 (exact
+    enumeration up to 16 values, else 20 000 fixed-seed draws)."""
+    d = values[values != 0.0]
+    if d.size == 0:
+        return 1.0
+    total = float(d.sum()) - 1e-12 * float(np.abs(d).sum())
+    if d.size <= 16:
+        signs = 1.0 - 2.0 * ((np.arange(2**d.size)[:, None] >> np.arange(d.size)) & 1)
+        return float(np.mean(signs @ d >= total))
+    rng = np.random.default_rng(0)
+    signs = rng.choice((-1.0, 1.0), size=(20000, d.size))
+    return float((1 + np.sum(signs @ d >= total)) / 20001)
+
+
+def judge_pair(reference: np.ndarray, errors: np.ndarray) -> float:
+    """One-sided p that ``errors`` (F, H) beat ``reference``: Student t on the per-fold mean
+    log ratios D_f = (1/H) Σ_h ln(E⁰_fh / E_fh) (batch means, F - 1 degrees of freedom)."""
+    d = np.log(np.maximum(reference, 1e-300) / np.maximum(errors, 1e-300)).mean(axis=1)
+    if d.size < 2:
+        return 1.0
+    sd = float(np.std(d, ddof=1))
+    if sd == 0:
+        return 0.0 if d.mean() > 0 else 1.0
+    return float(stats.t.sf(d.mean() / (sd / np.sqrt(d.size)), d.size - 1))
+
+
+
+def whitened_score(hz: Horizons, cand: Replays, reference: Replays,
+                   batch_s: float = WHITEN_BATCH_S) -> float:
+    """One-sided p of the whitened held-out score test on the whole-block replays of ``hz``.
+
+    A replay's error integrates the noise of every step, so along a run it is a random walk
+    plus a few slow transients; differencing it sample to sample whitens the walk, and an
+    AR(1) filter, ρ from the reference's differenced residual of each component, the rest.
+    With u the whitened reference residual and v the whitened correction c = r - r' (the
+    same filter), S = Σ u · v; with no effect u is noise independent of v (fitted on the other
+    blocks) and S is centred on 0. Its variance is estimated by batch means over windows of
+    ``batch_s`` [s] (robust to the noise being larger in turns than on straights, and to the
+    short correlation the filter leaves); p = P(N(0, 1) > S / √V).
+    """
+    seg = hz.seg[-1]
+    dt = float(np.median(seg.dt[seg.dt > 0]))
+    width = max(2, int(round(batch_s / dt)))
+    batches = []
+    for j in range(len(seg)):
+        ok = seg.gt_ok[j]
+        r = reference.res[-1][j][ok]
+        c = r - cand.res[-1][j][ok]
+        if len(r) < 3:
+            continue
+        dr, dc = np.diff(r, axis=0), np.diff(c, axis=0)
+        prev = np.sum(dr[1:] * dr[:-1], axis=0)
+        rho = np.clip(prev / np.maximum(np.sum(dr * dr, axis=0), 1e-300), -0.95, 0.95)
+        u = dr[1:] - rho * dr[:-1]
+        v = dc[1:] - rho * dc[:-1]
+        prod = np.sum(u * v, axis=1)
+        n = prod.size // width
+        if n:
+            batches.extend(prod[:n * width].reshape(n, width).sum(axis=1).tolist())
+        if prod.size % width:
+            batches.append(float(prod[n * width:].sum()))
+    b = np.array(batches)
+    var = float(np.sum(b * b))
+    if b.size < 2 or var <= 0:
+        return 1.0
+    return float(stats.norm.sf(b.sum() / np.sqrt(var)))
