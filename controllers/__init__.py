@@ -7,6 +7,7 @@ an env's path-following baseline from the env's public surface (vehicle, path, c
 
 from __future__ import annotations
 
+from slipenv.contracts.names import lookup
 from slipenv.contracts.observation import OBS_DIM, OBS_NAMES, build_observation
 
 from .base import Controller, Policy
@@ -31,12 +32,7 @@ def controller_by_name(name: str, **kw: object) -> Controller:
     ValueError
         If ``name`` is unknown (the message lists the known names).
     """
-    try:
-        cls = CONTROLLERS[name]
-    except KeyError:
-        raise ValueError(f"unknown controller {name!r}; known controllers: "
-                         f"{', '.join(sorted(CONTROLLERS))}") from None
-    return cls(**kw)  # type: ignore[arg-type]
+    return lookup(CONTROLLERS, name, "controller")(**kw)  # type: ignore[arg-type]
 
 
 __all__ = [

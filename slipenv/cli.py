@@ -16,7 +16,6 @@ numbers, output paths by writing to them); a bad one exits with status 2 and one
 from __future__ import annotations
 
 import argparse
-import difflib
 import json
 import sys
 import tempfile
@@ -27,6 +26,7 @@ from typing import Any, Protocol
 import gymnasium as gym
 
 import slipenv
+from slipenv.contracts.names import did_you_mean
 from slipenv.evaluation import evaluate_cli, sweep_cli
 from slipenv.testbed import cli as testbed_cli
 
@@ -63,10 +63,8 @@ def env_id(text: str) -> str:
     if text in gym.registry:
         return text
     known = sorted(e for e in gym.registry if e.startswith("slipenv/"))
-    hint = difflib.get_close_matches(text, known, n=1, cutoff=0.8)
-    raise argparse.ArgumentTypeError(
-        f"unknown env id {text!r}" + (f"; did you mean {hint[0]!r}?" if hint else "")
-        + f" (registered: {', '.join(known)})")
+    raise argparse.ArgumentTypeError(f"unknown env id {text!r}{did_you_mean(text, known)} "
+                                     f"(registered: {', '.join(known)})")
 
 
 def _integer(text: str, low: int, what: str) -> int:

@@ -20,13 +20,14 @@ the ``soils``, ``slopes_deg`` and ``variations`` axes. :func:`load_grid` validat
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import hashlib
 import itertools
 import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from slipenv.contracts.names import did_you_mean
 
 GRID_KEYS = ("env_ids", "policies", "seeds", "soils", "slopes_deg", "variations", "env_kwargs",
              "max_steps")
@@ -119,9 +120,8 @@ def _variations(path: str | Path, grid: dict) -> list[tuple[str, dict, float | N
     if soils != [None]:
         for soil in _str_list(path, "soils", soils):
             if soil not in SOILS:
-                close = difflib.get_close_matches(soil, sorted(SOILS), n=1)
-                hint = f" (did you mean {close[0]!r}?)" if close else ""
-                raise _err(path, f"soils: unknown soil {soil!r}{hint}; soils: {sorted(SOILS)}")
+                raise _err(path, f"soils: unknown soil {soil!r}{did_you_mean(soil, SOILS)}; "
+                                 f"soils: {sorted(SOILS)}")
     slopes = grid.get("slopes_deg") or [None]
     if slopes != [None] and not all(isinstance(s, int | float) and not isinstance(s, bool)
                                     for s in slopes):
@@ -187,9 +187,8 @@ def load_grid(path: str | Path) -> list[Cell]:
         raise _err(path, "a grid file is a mapping of keys " + ", ".join(GRID_KEYS))
     for key in grid:
         if key not in GRID_KEYS:
-            close = difflib.get_close_matches(str(key), GRID_KEYS, n=1)
-            hint = f"; did you mean {close[0]!r}?" if close else ""
-            raise _err(path, f"unknown key {key!r}{hint} Keys: {', '.join(GRID_KEYS)}")
+            raise _err(path, f"unknown key {key!r}{did_you_mean(key, GRID_KEYS)}. "
+                             f"Keys: {', '.join(GRID_KEYS)}")
     missing = [k for k in REQUIRED_KEYS if k not in grid]
     if missing:
         raise _err(path, f"missing required key(s) {', '.join(missing)}")

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+from slipenv.contracts.names import lookup
 from slipenv.paths import _validate as check
 from slipenv.paths.builder import PathBuilder
 from slipenv.paths.path import Path
@@ -179,9 +180,4 @@ def path_by_name(name: str, **kw: object) -> Path:
     ValueError
         If ``name`` is unknown (the message lists the known names).
     """
-    try:
-        builder = PATHS[name]
-    except KeyError:
-        raise ValueError(f"unknown path {name!r}; known paths: {', '.join(sorted(PATHS))}") \
-            from None
-    return builder(**kw)
+    return lookup(PATHS, name, "path")(**kw)

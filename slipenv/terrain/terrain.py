@@ -8,13 +8,14 @@ and soil vary independently.
 
 from __future__ import annotations
 
-import difflib
 import functools
 import math
 import numbers
 from dataclasses import dataclass
 
 import numpy as np
+
+from slipenv.contracts.names import did_you_mean
 
 TERRAIN_KINDS = ("flat", "slope", "mounds")
 MAX_SLOPE_DEG = 45.0  # [deg] steeper than any soil's angle of repose: nothing drives there
@@ -78,7 +79,7 @@ class TerrainSpec:
 
     def __post_init__(self) -> None:
         if not isinstance(self.kind, str) or self.kind not in TERRAIN_KINDS:
-            hint = _did_you_mean(self.kind, TERRAIN_KINDS)
+            hint = did_you_mean(self.kind, TERRAIN_KINDS)
             raise ValueError(
                 f"TerrainSpec.kind must be one of {TERRAIN_KINDS}, got {self.kind!r}{hint}"
             )
@@ -152,11 +153,6 @@ def _is_real(value) -> bool:
 
 def _is_int(value) -> bool:
     return isinstance(value, numbers.Integral) and not isinstance(value, bool)
-
-
-def _did_you_mean(value, choices) -> str:
-    close = difflib.get_close_matches(str(value), choices, n=1)
-    return f"; did you mean {close[0]!r}?" if close else ""
 
 
 class Terrain:

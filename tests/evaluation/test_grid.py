@@ -48,7 +48,7 @@ def test_cell_keys_are_stable_across_loads_and_change_with_the_cell(tmp_path):
     (("policies:", "policys:"), "unknown key 'policys'; did you mean 'policies'?"),
     (("HuskySand-v0", "HuskySnad-v0"), "env_ids: unknown slipenv env id"),
     (("stanley", "stanly"), "policies: --policy: unknown policy 'stanly'"),
-    (("loose_sand", "loose_snad"), "unknown soil 'loose_snad' (did you mean 'loose_sand'?)"),
+    (("loose_sand", "loose_snad"), "unknown soil 'loose_snad'; did you mean 'loose_sand'?"),
     (("max_episode_s: 20", "max_episode_sec: 20"), "unknown slipenv option 'max_episode_sec'"),
     (("{start: 3, count: 2}", "[0, 0]"), "seeds repeat"),
     (("max_steps: 50", "max_steps: -1"), "max_steps must be an integer >= 1"),
