@@ -16,8 +16,15 @@ right wheel 1.5 % larger together with a 2 % wider track (both must be named), a
 circle with the 1 % track-width error (a geometric cause, flagged not separable), and a clean
 log (``none``).
 
+``--kinds N`` runs the kinematic generator for every vehicle kind (``diff_drive``,
+``skid_steer``, ``rover4ws``) and every log length of ``--lengths`` (default 60, 120, 300 s)
+on N seeds of: a single effect (right wheels 1.5 % larger), two effects (that and a 2 % wider
+track; both must be named) and a clean log (no false alarm), and prints the table with the
+mean diagnosis time.
+
     python benchmarks/diagnose_hit_rate.py --n 40 --duration 120 --jobs 2
     python benchmarks/diagnose_hit_rate.py --n 0 --kinematic 30 --duration 120
+    python benchmarks/diagnose_hit_rate.py --n 0 --kinds 5 --lengths 60,120,300
 """
 
 from __future__ import annotations
@@ -135,6 +142,54 @@ def kinematic_table(n: int, duration: float, jobs: int) -> str:
     return "\n".join(rows)
 
 
+KIND_CASES = {
+    # case: (true radii L, R and track width for a nominal 0.1 m / 0.5 m robot, wanted)
+    "single (radius R +1.5 %)": ((0.1, 0.1015, 0.5), {"rolling_radius"}),
+    "two (radius R +1.5 %, track +2 %)": ((0.1, 0.1015, 0.51), {"rolling_radius", "track_width"}),
+    "clean": (None, set()),
+}
+KINDS = ("diff_drive", "skid_steer", "rover4ws")
+
+
+def kind_one(job: tuple[str, str, float, int]) -> dict:
+    """Diagnose one kinematic log of a vehicle kind; whether the answer is right."""
+    from slipenv.diagnose.cli import diagnose
+    from slipenv.diagnose.kinematic import KinematicTruth, kinematic_log
+
+    case, kind, duration, seed = job
+    geometry, wanted = KIND_CASES[case]
+    truth = KinematicTruth(*geometry) if geometry else None
+    log = kinematic_log(seed, truth, duration_s=duration, kind=kind)
+    t0 = time.perf_counter()
+    report, _ = diagnose([log], case)
+    named = {report["cause"], *report["also"]} - {"none"}
+    ok = (not named) if not wanted else wanted <= named
+    return {"case": case, "kind": kind, "duration": duration, "seed": seed, "ok": ok,
+            "named": sorted(named), "s": time.perf_counter() - t0}
+
+
+def kinds_table(n: int, lengths: list[float], jobs: int) -> str:
+    """Rates per vehicle kind, case and log length over seeds 0..n-1 (markdown)."""
+    work = [(case, kind, d, 1000 * k + seed) for k, kind in enumerate(KINDS)
+            for case in KIND_CASES for d in lengths for seed in range(n)]
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        results = list(pool.map(kind_one, work))
+    head = " | ".join(f"{d / 60:g} min" for d in lengths)
+    rows = [f"| kind | case | {head} | mean time ({lengths[-1] / 60:g} min) |",
+            "|---|---|" + "---|" * len(lengths) + "---|"]
+    for kind in KINDS:
+        for case in KIND_CASES:
+            cells = []
+            for d in lengths:
+                rs = [r for r in results if r["kind"] == kind and r["case"] == case
+                      and r["duration"] == d]
+                cells.append(f"{sum(r['ok'] for r in rs)}/{len(rs)}")
+            last = [r["s"] for r in results if r["kind"] == kind and r["case"] == case
+                    and r["duration"] == lengths[-1]]
+            rows.append(f"| {kind} | {case} | {' | '.join(cells)} | {np.mean(last):.1f} s |")
+    return "\n".join(rows)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -146,7 +201,14 @@ def main(argv: list[str] | None = None) -> int:
                         help="comma-separated effects to draw from (default: all generated)")
     parser.add_argument("--kinematic", type=int, default=0,
                         help="seeds per case of the kinematic generator (default 0: skip)")
+    parser.add_argument("--kinds", type=int, default=0,
+                        help="seeds per vehicle kind, case and length (default 0: skip)")
+    parser.add_argument("--lengths", default="60,120,300",
+                        help="comma-separated log lengths [s] of --kinds")
     args = parser.parse_args(argv)
+    if args.kinds > 0:
+        lengths = [float(v) for v in args.lengths.split(",")]
+        print(kinds_table(args.kinds, lengths, args.jobs), flush=True)
     if args.kinematic > 0:
         print(kinematic_table(args.kinematic, args.duration, args.jobs), flush=True)
     if args.n <= 0:

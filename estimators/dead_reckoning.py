@@ -18,11 +18,17 @@ from .base import OdometryGeometry, check_frame_time
 
 
 def side_angles_rad(frame: SensorFrame, geometry: OdometryGeometry) -> tuple[float, float]:
-    """Mean cumulative wheel angle of the left and right groups [rad]."""
-    counts = np.asarray(frame.enc_counts, dtype=float)
-    left = float(np.mean(counts[list(geometry.left)])) / geometry.counts_per_rad
-    right = float(np.mean(counts[list(geometry.right)])) / geometry.counts_per_rad
-    return left, right
+    """Mean cumulative wheel angle of the left and right groups [rad].
+
+    The group means are taken in plain floats (the same left-to-right sum ``np.mean`` does
+    for a handful of values, so the same bits): this runs once per control step.
+    """
+    counts = frame.enc_counts
+    c = counts.tolist() if isinstance(counts, np.ndarray) else np.asarray(counts).tolist()
+    left = [float(c[i]) for i in geometry.left]
+    right = [float(c[i]) for i in geometry.right]
+    return (sum(left) / len(left) / geometry.counts_per_rad,
+            sum(right) / len(right) / geometry.counts_per_rad)
 
 
 def integrate_arc(

@@ -40,14 +40,17 @@ def track_angles_rad(frame: SensorFrame, geometry: OdometryGeometry) -> tuple[fl
         If ``geometry.left``/``geometry.right`` index past ``frame.enc_counts`` or a count used is
         not finite.
     """
-    counts = np.asarray(frame.enc_counts, dtype=float)
-    used = list(geometry.left) + list(geometry.right)
+    counts = frame.enc_counts
+    if not isinstance(counts, np.ndarray):
+        counts = np.asarray(counts, dtype=float)
+    used = geometry.left + geometry.right
     if counts.ndim != 1 or max(used) >= counts.size or min(used) < -counts.size:
         raise ValueError(
             f"geometry.left={geometry.left}/geometry.right={geometry.right} do not index "
             f"frame.enc_counts of shape {counts.shape}"
         )
-    if not np.all(np.isfinite(counts[used])):
+    c = counts.tolist()
+    if not all(math.isfinite(c[i]) for i in used):
         raise ValueError(f"frame.enc_counts must be finite, got {counts!r}")
     return side_angles_rad(frame, geometry)
 

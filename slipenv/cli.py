@@ -195,6 +195,8 @@ def add_bench(sub: SubParsers) -> argparse.ArgumentParser:
     p.add_argument("--steps", type=positive_int, default=200, help="env steps per measurement")
     p.add_argument("--repeats", type=positive_int, default=5, help="interleaved repetitions")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--no-vec", action="store_true",
+                   help="skip the vectorised-throughput figure (saves the worker start-up)")
     return p
 
 
@@ -203,7 +205,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from slipenv.bench import format_bench, run_bench
 
     ids = args.env_ids or sorted(e for e in gym.registry if e.startswith("slipenv/"))
-    result = run_bench(ids, steps=args.steps, repeats=args.repeats, progress=not args.quiet)
+    result = run_bench(ids, steps=args.steps, repeats=args.repeats, progress=not args.quiet,
+                       vec=not args.no_vec)
     print(format_bench(result))
     if json_path is not None:
         _write_json(json_path, result)
@@ -214,7 +217,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 # -- reproduce -----------------------------------------------------------------------------
 def add_reproduce(sub: SubParsers) -> argparse.ArgumentParser:
     p = sub.add_parser("reproduce", help="re-run a source paper's experiment")
-    p.add_argument("name", type=experiment_name, help="lindgren | yamauchi")
+    p.add_argument("name", type=experiment_name, help="lindgren | yamauchi | reina")
     p.add_argument("--quick", action="store_true", help="shorter runs, same experiments")
     p.add_argument("--json", default=None, help="write metrics and paper values to this JSON")
     p.add_argument("--out", default="runs/reproduce_{name}",

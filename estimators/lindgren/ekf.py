@@ -13,15 +13,28 @@ time stamp of every asynchronous bearing, and must look at the innovation and it
 committing an update (nearest-innovation data association and a χ² gate on bearings, a slip
 range check on odometry); filterpy's ``update`` commits at once, keeps one ``dim_z``, and
 deep-copies its state on every call, which at ~5-7 updates per 20 Hz step costs more than the
-arithmetic. The update below is filterpy's (same Joseph form), taken apart so the innovation can
-be inspected first; the tests check a step of the class against the plain functions and
-filterpy's ``ExtendedKalmanFilter.update`` to 1e-12.
+arithmetic. The update below is filterpy's, taken apart so the innovation can be inspected
+first; the tests check a step of the class against the plain functions and filterpy's
+``ExtendedKalmanFilter.update`` to 1e-12.
 
-Numerical choices: the covariance update uses the Joseph form
-``P = (I - K H) P (I - K H)' + K R K'``, which stays symmetric positive definite under
-round-off and for any gain; ``P`` is symmetrised after every predict and update. A frame that
-fails validation raises ``ValueError`` before anything changes; any error while processing a
-frame restores the state from before it.
+Cost (issue 15): at 20 Hz with ~1.7 bearings a step the filter makes ~2.8 predictions and ~5.6
+updates per step, each a handful of 13 x 13 numpy calls, so the per-call overhead of numpy
+(~0.5 µs) is what it costs, not the arithmetic. Hence the prediction's ``f(x)``, ``F`` and ``Q``
+are written out in plain floats into preallocated buffers (bit-for-bit the plain functions of
+:mod:`.models`, tested), the odometric and bearing models likewise per wheel and per beacon,
+directly measured states (gyro: Ω; inclinometer: α1, α2) read columns of P instead of
+multiplying by a one-hot H, and state and covariance are replaced, never written into, so a
+failed frame restores them from references. ``benchmarks/estimator_cost.py`` measures it.
+
+Numerical choices: with ``S = H P H' + R = L L'`` (Cholesky, closed form for n_z <= 2) and the
+optimal gain ``K = P H' S⁻¹``, the Joseph form ``(I - K H) P (I - K H)' + K R K'`` equals
+``P - A A'`` with ``A = P H' L⁻ᵀ``, which is how the covariance is updated: a symmetric
+rank-n_z downdate (numpy's ``A @ A.T`` goes through BLAS ``syrk``), so P stays exactly
+symmetric without a symmetrising pass. Predictions are symmetrised. The outputs equal the
+former product-form Joseph implementation to 1e-12 relative on a frozen FarmField run of every
+scheme (``tests/estimators/test_lindgren_reference.py``). A frame that fails validation raises
+``ValueError`` before anything changes; any error while processing a frame restores the state
+from before it.
 """
 
 from __future__ import annotations
@@ -36,7 +49,6 @@ from slipenv.contracts import PoseEstimate, SensorFrame, wrap_angle
 
 from ..base import OdometryGeometry, check_frame_time
 from . import models as lm
-from . import observations as lo
 from .models import OracleSoil
 from .params import LindgrenNoise, Scheme, parse_scheme
 
@@ -124,8 +136,8 @@ class LindgrenEKF:
         self._R_tilt = np.eye(2) * p.tilt_var_rad2
         self._R_bearing = np.array([[p.bearing_var_rad2]])
         self._gate = float(stats.chi2.ppf(p.bearing_gate_prob, 1))
-        self._I = np.eye(self.n)
         self._left, self._right = list(geometry.left), list(geometry.right)
+        self._alloc_buffers()
         self.x = np.zeros(self.n)
         self.P = np.eye(self.n)
         self.history: dict[str, list[tuple[float, np.ndarray, np.ndarray]]] = {
@@ -133,8 +145,8 @@ class LindgrenEKF:
         self.skipped: dict[str, int] = {}
         self._t: float | None = None  # time of the last frame [s]
         self._t_state = 0.0  # time the state refers to [s]
-        self._counts = np.zeros(2)  # side-mean cumulative counts at the last frame
-        self._torque = np.full(2, np.nan)  # side-mean torque at the last frame
+        self._counts = (0.0, 0.0)  # side-mean cumulative counts (left, right) at the last frame
+        self._torque = (math.nan, math.nan)  # side-mean torque (left, right) at the last frame
 
     # -- start ---------------------------------------------------------------------------------
     def initial_state(self, x_m: float, y_m: float, yaw_rad: float,
@@ -170,7 +182,7 @@ class LindgrenEKF:
             raise ValueError("x must be finite and P symmetric")
         np.linalg.cholesky(P)  # raises LinAlgError unless P is positive definite
         check_frame_time(None, frame)
-        self._counts = self._side_counts(frame) if self.uses_odometry else np.zeros(2)
+        self._counts = self._side_counts(frame) if self.uses_odometry else (0.0, 0.0)
         self.x, self.P = x, P
         self._t = self._t_state = float(frame.t_s)
         self._torque = self._side_torque(frame)
@@ -189,10 +201,13 @@ class LindgrenEKF:
         counts = self._side_counts(frame) if self.uses_odometry else self._counts
         bearings, n_bad = self._frame_bearings(frame) if self.uses_exteroceptive else ([], 0)
         torque = self._side_torque(frame)
-        saved = (self.x.copy(), self.P.copy(), self._t_state, dict(self.skipped),
-                 {k: len(v) for k, v in self.history.items()})
+        # Every predict and update binds new arrays to x and P (never writes into the old
+        # ones), so references are enough to restore them.
+        saved = (self.x, self.P, self._t_state, dict(self.skipped),
+                 [len(v) for v in self.history.values()])
         try:
-            self._skip("bearing_nan", n_bad)
+            if n_bad:
+                self._skip("bearing_nan", n_bad)
             for t_b, z_b in bearings:
                 self.predict_to(t_b)
                 self._update_bearing(t_b, z_b)
@@ -200,12 +215,15 @@ class LindgrenEKF:
             if self.uses_exteroceptive:
                 self._update_inertial(frame, t)
             if self.uses_odometry:
-                t_bar = np.where(np.isfinite(self._torque), 0.5 * (self._torque + torque), torque)
-                self._update_odometry(t, tau, counts - self._counts, t_bar)
+                (a0, a1), (b0, b1) = self._torque, torque
+                t_bar = (0.5 * (a0 + b0) if math.isfinite(a0) else b0,
+                         0.5 * (a1 + b1) if math.isfinite(a1) else b1)
+                dcounts = (counts[0] - self._counts[0], counts[1] - self._counts[1])
+                self._update_odometry(t, tau, dcounts, t_bar)
         except Exception:
             self.x, self.P, self._t_state, self.skipped = saved[:4]
-            for k, n in saved[4].items():
-                del self.history[k][n:]
+            for hist, n in zip(self.history.values(), saved[4], strict=True):
+                del hist[n:]
             raise
         self._t, self._counts, self._torque = t, counts, torque
         return self.estimate()
@@ -215,23 +233,101 @@ class LindgrenEKF:
         tau = t_s - self._t_state
         if tau <= 0.0:
             return
-        p = self.params
-        F = lm.process_F(self.x, tau)
-        Q = lm.process_Q(self.x, tau, p.jerk_psd_v, p.jerk_psd_omega, p.tilt_psd,
-                         p.radius_var_per_m, p.k_s_rel_var_per_m)
-        self.x = lm.process_fx(self.x, tau)
-        self.x[lm.ITH] = wrap_angle(self.x[lm.ITH])
+        x, F, Q = self._process(tau)
         P = F @ self.P @ F.T + Q
         self.P = 0.5 * (P + P.T)
+        self.x = x
         self._t_state = t_s
+
+    def _process(self, tau: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(f(x), F, Q)`` over τ: :func:`.models.process_fx` (θ wrapped), :func:`.process_F`
+        and :func:`.process_Q` written out in plain floats, term by term in the same order, so
+        that they are bit-for-bit equal to those functions (tested) at a fraction of the cost.
+        ``F`` and ``Q`` are the filter's own buffers, overwritten by the next call."""
+        p = self.params
+        xs = self.x.tolist()
+        px, py, th, v, om, vd, omd, a1, a2 = xs[:9]
+        # process_fx and process_F (Eq. 13, 7); shared left-to-right prefixes of their terms
+        ht = 0.5 * tau
+        tt = ht * tau  # 0.5 τ²
+        v_bar = v + ht * vd
+        dth = tau * (om + ht * omd)
+        th_mid = th + 0.5 * dth
+        c, s = math.cos(th_mid), math.sin(th_mid)
+        cd, sd = math.cos(dth), math.sin(dth)
+        da1 = -sd * a1 - cd * a2
+        da2 = cd * a1 - sd * a2
+        tv = tau * v_bar
+        ntvs = -tau * v_bar * s
+        tvc = tv * c
+        self._F.flat[self._F_idx] = [
+            ntvs, tau * c, tt * c, ntvs * 0.5 * tau, ntvs * 0.25 * tau * tau,
+            tvc, tau * s, tt * s, tvc * 0.5 * tau, tvc * 0.25 * tau * tau,
+            tau, tt, tau, tau,
+            cd, -sd, sd, cd, tau * da1, tt * da1, tau * da2, tt * da2]
+        xs[:9] = [px + tvc, py + tv * s, wrap_angle(th + dth), v + tau * vd, om + tau * omd,
+                  vd, omd, cd * a1 - sd * a2, sd * a1 + cd * a2]
+        # process_Q: white jerk on the along-track and yaw chains (jerk_block), tilt walks
+        t2 = tau * tau
+        t3 = t2 * tau
+        b00, b01, b02 = t3 * t2 / 20.0, t2 * t2 / 8.0, t3 / 6.0
+        b11, b12 = t3 / 3.0, t2 / 2.0
+        qv, qw = p.jerk_psd_v, p.jerk_psd_omega
+        q00, q01, q02 = qv * b00, qv * b01, qv * b02
+        q_tilt = p.tilt_psd * tau
+        qu = [q01 * c, q01 * s, q02 * c, q02 * s]
+        q = [q00 * (c * c), q00 * (c * s), q00 * (s * c), q00 * (s * s), *qu,
+             qv * b11, qv * b12, qv * b12, qv * tau,
+             qw * b00, qw * b01, qw * b02, qw * b01, qw * b11, qw * b12, qw * b02, qw * b12,
+             qw * tau, q_tilt, q_tilt, *qu]
+        if self.n == lm.N_SLIP:
+            d = abs(v_bar) * tau
+            q_r = p.radius_var_per_m * d
+            q += [q_r, q_r, p.k_s_rel_var_per_m * d * xs[lm.IKL] ** 2,
+                  p.k_s_rel_var_per_m * d * xs[lm.IKR] ** 2]
+        Q = self._Q
+        Q.flat[self._Q_idx] = q
+        return np.array(xs), self._F, Q
+
+    def _alloc_buffers(self) -> None:
+        """Preallocate F, Q and the observation Jacobians with their constant entries."""
+        n = self.n
+        self._F = np.eye(n)
+        f_cells = [(lm.IX, lm.ITH), (lm.IX, lm.IV), (lm.IX, lm.IVD), (lm.IX, lm.IOM),
+                   (lm.IX, lm.IOMD), (lm.IY, lm.ITH), (lm.IY, lm.IV), (lm.IY, lm.IVD),
+                   (lm.IY, lm.IOM), (lm.IY, lm.IOMD), (lm.ITH, lm.IOM), (lm.ITH, lm.IOMD),
+                   (lm.IV, lm.IVD), (lm.IOM, lm.IOMD), (lm.IA1, lm.IA1), (lm.IA1, lm.IA2),
+                   (lm.IA2, lm.IA1), (lm.IA2, lm.IA2), (lm.IA1, lm.IOM), (lm.IA1, lm.IOMD),
+                   (lm.IA2, lm.IOM), (lm.IA2, lm.IOMD)]
+        self._F_idx = np.ravel_multi_index(tuple(np.array(f_cells).T), (n, n))
+        yaw = (lm.ITH, lm.IOM, lm.IOMD)
+        q_cells = [(0, 0), (0, 1), (1, 0), (1, 1), (0, lm.IV), (1, lm.IV), (0, lm.IVD),
+                   (1, lm.IVD), (lm.IV, lm.IV), (lm.IV, lm.IVD), (lm.IVD, lm.IV),
+                   (lm.IVD, lm.IVD)]
+        q_cells += [(i, j) for i in yaw for j in yaw]
+        q_cells += [(lm.IA1, lm.IA1), (lm.IA2, lm.IA2)]
+        q_cells += [(lm.IV, 0), (lm.IV, 1), (lm.IVD, 0), (lm.IVD, 1)]  # the symmetric ones
+        if n == lm.N_SLIP:
+            q_cells += [(lm.IRL, lm.IRL), (lm.IRR, lm.IRR), (lm.IKL, lm.IKL), (lm.IKR, lm.IKR)]
+        self._Q = np.zeros((n, n))
+        self._Q_idx = np.ravel_multi_index(tuple(np.array(q_cells).T), (n, n))
+        self._H_acc = np.zeros((2, n))
+        self._H_acc[0, lm.IVD], self._H_acc[0, lm.IA1], self._H_acc[1, lm.IA2] = (
+            1.0 / lm.G_MPS2, 1.0, -1.0)
+        self._H_odo = np.zeros((2, n))
+        self._h_bearing = np.zeros(n)
+        self._h_bearing[lm.ITH] = -1.0
+        if self.beacons_xy is not None:
+            self._bx = np.ascontiguousarray(self.beacons_xy[:, 0])
+            self._by = np.ascontiguousarray(self.beacons_xy[:, 1])
 
     def estimate(self) -> PoseEstimate:
         """The current estimate; ``extras`` holds R_w, k_s and the skip counts."""
-        x = self.x
+        xs = self.x.tolist()
         r_w: tuple[float, float]  # effective rolling radius (left, right) [m]
         k_s: tuple[float, float]  # torque/slip gradient (left, right) [torque unit]
         if self.estimates_soil:
-            r_w, k_s = (x[lm.IRL], x[lm.IRR]), (x[lm.IKL], x[lm.IKR])
+            r_w, k_s = (xs[lm.IRL], xs[lm.IRR]), (xs[lm.IKL], xs[lm.IKR])
         elif self.oracle is not None:
             r_w, k_s = self.oracle.wheel_radius_m, self.oracle.k_s
         else:
@@ -240,26 +336,38 @@ class LindgrenEKF:
                   "k_sl": float(k_s[0]), "k_sr": float(k_s[1]),
                   "n_bearings_used": len(self.history["bearing"]),
                   "n_skipped": sum(self.skipped.values()), "skipped": dict(self.skipped)}
-        return PoseEstimate(float(x[lm.IX]), float(x[lm.IY]), float(x[lm.ITH]),
-                            speed_mps=float(x[lm.IV]), yaw_rate_rps=float(x[lm.IOM]),
-                            cov=self.P[:3, :3].copy(), extras=extras)
+        return PoseEstimate(xs[lm.IX], xs[lm.IY], xs[lm.ITH], speed_mps=xs[lm.IV],
+                            yaw_rate_rps=xs[lm.IOM], cov=self.P[:3, :3].copy(), extras=extras)
 
     # -- input validation ----------------------------------------------------------------------
-    def _side_counts(self, frame: SensorFrame) -> np.ndarray:
-        counts = np.asarray(frame.enc_counts, dtype=float)
+    def _side_counts(self, frame: SensorFrame) -> tuple[float, float]:
+        """Mean cumulative counts of the (left, right) wheel group."""
+        counts = frame.enc_counts
         idx = self._left + self._right
-        if counts.ndim != 1 or len(counts) <= max(idx):
-            raise ValueError(f"enc_counts has shape {counts.shape}; the geometry needs wheel "
-                             f"indices {idx}")
-        if not np.all(np.isfinite(counts[idx])):
-            raise ValueError(f"non-finite encoder counts at t = {frame.t_s}: {counts[idx]}")
-        return np.array([counts[self._left].mean(), counts[self._right].mean()])
+        if not isinstance(counts, np.ndarray) or counts.ndim != 1 or len(counts) <= max(idx):
+            counts = np.asarray(counts, dtype=float)
+            if counts.ndim != 1 or len(counts) <= max(idx):
+                raise ValueError(f"enc_counts has shape {counts.shape}; the geometry needs "
+                                 f"wheel indices {idx}")
+        c = counts.tolist()
+        left = [float(c[i]) for i in self._left]
+        right = [float(c[i]) for i in self._right]
+        if not all(math.isfinite(v) for v in left + right):
+            raise ValueError(f"non-finite encoder counts at t = {frame.t_s}: {left + right}")
+        # the same left-to-right sum np.mean does for these few values
+        return sum(left) / len(left), sum(right) / len(right)
 
-    def _side_torque(self, frame: SensorFrame) -> np.ndarray:
-        torque = np.asarray(frame.wheel_torque_nm, dtype=float)
+    def _side_torque(self, frame: SensorFrame) -> tuple[float, float]:
+        """Mean torque of the (left, right) wheel group; NaN when the frame has none."""
+        torque = frame.wheel_torque_nm
+        if not isinstance(torque, np.ndarray):
+            torque = np.asarray(torque, dtype=float)
         if torque.ndim != 1 or len(torque) <= max(self._left + self._right):
-            return np.full(2, np.nan)
-        return np.array([torque[self._left].mean(), torque[self._right].mean()])
+            return math.nan, math.nan
+        tq = torque.tolist()
+        left = [float(tq[i]) for i in self._left]
+        right = [float(tq[i]) for i in self._right]
+        return sum(left) / len(left), sum(right) / len(right)
 
     def _frame_bearings(self, frame: SensorFrame) -> tuple[list[tuple[float, float]], int]:
         """Finite (time, bearing) pairs sorted by time, and the number of non-finite ones."""
@@ -268,14 +376,22 @@ class LindgrenEKF:
         if z.shape != tb.shape or z.ndim != 1:
             raise ValueError(f"beacon_bearings_rad {z.shape} and beacon_times_s {tb.shape} "
                              "must be 1-D of one length")
-        ok = np.isfinite(z) & np.isfinite(tb)
-        late = ok & ((tb <= self._t) | (tb > frame.t_s))
-        if np.any(late):
-            raise ValueError(f"bearing times {tb[late]} lie outside this frame's interval "
+        if z.size == 0:
+            return [], 0
+        t_prev, t_now = self._t, float(frame.t_s)
+        pairs, n_bad, late = [], 0, []
+        for t_b, z_b in zip(tb.tolist(), z.tolist(), strict=True):
+            if not (math.isfinite(t_b) and math.isfinite(z_b)):
+                n_bad += 1
+            elif t_b <= t_prev or t_b > t_now:
+                late.append(t_b)
+            else:
+                pairs.append((t_b, z_b))
+        if late:
+            raise ValueError(f"bearing times {np.array(late)} lie outside this frame's interval "
                              f"({self._t}, {frame.t_s}]")
-        order = np.argsort(tb[ok], kind="stable")
-        pairs = list(zip(tb[ok][order].tolist(), z[ok][order].tolist(), strict=True))
-        return pairs, int(np.sum(~ok))
+        pairs.sort(key=lambda pair: pair[0])  # stable, as np.argsort(kind="stable")
+        return pairs, n_bad
 
     def _skip(self, reason: str, n: int = 1) -> None:
         if n <= 0:
@@ -290,75 +406,163 @@ class LindgrenEKF:
         self.skipped[reason] = self.skipped.get(reason, 0) + n
 
     # -- updates -------------------------------------------------------------------------------
-    def _update(self, sensor: str, t: float, y: np.ndarray, H: np.ndarray, R: np.ndarray,
-                gate: float | None = None) -> bool:
-        """Kalman update with innovation ``y`` (Lindgren Eq. 8-11, Joseph form); record it.
+    # The covariance update. With P H' and S = H P H' + R = L L' (Cholesky), the optimal gain
+    # K = P H' S⁻¹ turns the Joseph form (I - K H) P (I - K H)' + K R K' into
+    #     P - A A',   A = P H' L⁻ᵀ,
+    # which is how it is computed (A A' by BLAS syrk, or the outer product a aᵀ for a scalar
+    # measurement), so P stays exactly symmetric without a symmetrising pass, at a third of the
+    # n x n work of the product form. The
+    # outputs match the former product-form implementation to 1e-12 relative (tests/estimators/
+    # test_lindgren_reference.py, a frozen FarmField run of every scheme).
+    def _update(self, sensor: str, t: float, y: np.ndarray, H: np.ndarray | slice,
+                R: np.ndarray, gate: float | None = None) -> bool:
+        """Kalman update with innovation ``y`` (Lindgren Eq. 8-11); record it.
 
-        Returns False, changing nothing, when ``y' S⁻¹ y`` exceeds ``gate``.
+        ``H`` has shape (2, n), or is the slice of two states measured directly (rows of the
+        identity: ``P H'`` is then two columns of P); ``R`` has shape (2, 2) (the filter's
+        vector sensors). Returns False, changing nothing, when ``y' S⁻¹ y`` exceeds ``gate``.
         """
-        PHt = self.P @ H.T
-        S = H @ PHt + R
-        S_inv = 1.0 / S if S.shape == (1, 1) else np.linalg.inv(S)  # n_z <= 3: inv is cheapest
-        if gate is not None and float(y @ S_inv @ y) > gate:
+        if isinstance(H, slice):
+            PHt = self.P[:, H]
+            S = PHt[H] + R
+        else:
+            PHt = self.P @ H.T
+            S = H @ PHt + R
+        (s00, s01), (s10, s11) = S.tolist()
+        s01 = 0.5 * (s01 + s10)
+        det = s00 * s11 - s01 * s01
+        y0, y1 = y.tolist()
+        w0, w1 = (s11 * y0 - s01 * y1) / det, (s00 * y1 - s01 * y0) / det  # S⁻¹ y
+        if gate is not None and y0 * w0 + y1 * w1 > gate:
             return False
-        K = PHt @ S_inv
-        self.x = self.x + K @ y
-        self.x[lm.ITH] = wrap_angle(self.x[lm.ITH])
-        I_KH = self._I - K @ H
-        P = I_KH @ self.P @ I_KH.T + K @ R @ K.T
-        self.P = 0.5 * (P + P.T)
+        x = self.x + PHt @ np.array([w0, w1])
+        x[lm.ITH] = wrap_angle(x[lm.ITH])
+        l00 = math.sqrt(s00)
+        l10 = s01 / l00
+        l11 = math.sqrt(s11 - l10 * l10)
+        A = PHt @ np.array([[1.0 / l00, -l10 / (l00 * l11)], [0.0, 1.0 / l11]])  # P H' L⁻ᵀ
+        self.x = x
+        self.P = self.P - A @ A.T  # A A' by numpy's syrk path: exactly symmetric
         self.history[sensor].append((t, y, S))
+        return True
+
+    def _update_scalar(self, sensor: str, t: float, y: float, h: np.ndarray | int, r: float,
+                       gate: float | None = None) -> bool:
+        """:meth:`_update` for one scalar measurement: ``h`` shape (n,), or the index ``i`` of
+        a state measured directly (``h = e_i``); variance ``r``."""
+        if isinstance(h, int):  # h = e_h: P h is a column of P, h' P h a diagonal entry
+            ph = self.P[:, h]
+            s = float(ph[h]) + r
+        else:
+            ph = self.P @ h
+            s = float(h @ ph) + r
+        if gate is not None and y * y / s > gate:
+            return False
+        x = self.x + ph * (y / s)
+        x[lm.ITH] = wrap_angle(x[lm.ITH])
+        a = ph * (1.0 / math.sqrt(s))
+        self.x = x
+        self.P = self.P - np.multiply.outer(a, a)
+        self.history[sensor].append((t, np.array([y]), np.array([[s]])))
         return True
 
     def _update_inertial(self, frame: SensorFrame, t: float) -> None:
         """Yaw gyro, then the accelerometer pair, then the inclinometer (Lindgren Eq. 14)."""
-        if math.isfinite(frame.gyro_z_rad_s):
-            y = frame.gyro_z_rad_s - lo.ins_hx(self.x)[2:]
-            self._update("gyro", t, y, lo.ins_H(self.x)[2:], self._R_gyro)
+        gz = frame.gyro_z_rad_s
+        if math.isfinite(gz):  # g1 = Ω
+            self._update_scalar("gyro", t, gz - float(self.x[lm.IOM]), lm.IOM,
+                                self._R_gyro[0, 0])
         else:
             self._skip("gyro_nan")
-        if math.isfinite(frame.acc_x_mps2) and math.isfinite(frame.acc_y_mps2):
-            z = np.array([frame.acc_x_mps2, frame.acc_y_mps2]) / lm.G_MPS2  # [g], Eq. 14
-            self._update("acc", t, z - lo.ins_hx(self.x)[:2], lo.ins_H(self.x)[:2], self._R_acc)
+        ax, ay = frame.acc_x_mps2, frame.acc_y_mps2
+        if math.isfinite(ax) and math.isfinite(ay):  # [a1/g, a2/g] of Eq. 14
+            _, _, _, v, om, vd, _, a1, a2 = self.x[:9].tolist()
+            g = lm.G_MPS2
+            y = np.array([ax / g - (vd / g + a1), ay / g - (v * om / g - a2)])
+            H = self._H_acc
+            H[1, lm.IV], H[1, lm.IOM] = om / g, v / g
+            self._update("acc", t, y, H, self._R_acc)
         else:
             self._skip("acc_nan")
-        if math.isfinite(frame.pitch_rad) and math.isfinite(frame.roll_rad):
-            z = np.array([-frame.pitch_rad, -frame.roll_rad])  # REP 103 -> Lindgren's α1, α2
-            self._update("tilt", t, z - lo.tilt_hx(self.x), lo.tilt_H(self.x), self._R_tilt)
+        pitch, roll = frame.pitch_rad, frame.roll_rad
+        if math.isfinite(pitch) and math.isfinite(roll):  # REP 103 -> Lindgren's α1, α2
+            y = np.array([-pitch - float(self.x[lm.IA1]), -roll - float(self.x[lm.IA2])])
+            self._update("tilt", t, y, slice(lm.IA1, lm.IA2 + 1), self._R_tilt)
         else:
             self._skip("tilt_nan")
 
-    def _update_odometry(self, t: float, tau: float, dcounts: np.ndarray,
-                         torque: np.ndarray) -> None:
-        """Counts over the frame interval by Eq. 15 (schemes 2-3) or Eq. 37 (scheme 4)."""
+    def _update_odometry(self, t: float, tau: float, dcounts: tuple[float, float],
+                         torque: tuple[float, float]) -> None:
+        """Counts over the frame interval by Eq. 15 (schemes 2-3) or Eq. 37 (scheme 4).
+
+        The predictions and Jacobians are :func:`.observations.odo_hx`, :func:`.odo_H`,
+        :func:`.odo_slip_hx`, :func:`.odo_slip_H` and :func:`.wheel_slip` written out per
+        wheel in plain floats, term by term in the same order.
+        """
         g = self.geometry
-        if not self.slip_model:
-            args = (tau, g.wheel_radius_m, g.track_width_m, g.counts_per_rad)
-            y = dcounts - lo.odo_hx(self.x, *args)
-            self._update("odo", t, y, lo.odo_H(self.x, *args), self._R_odo)
-            return
-        if not np.all(np.isfinite(torque)):
-            self._skip("torque_nan")
-            return
-        if np.any(np.abs(lo.wheel_slip(self.x, tau, torque, g.track_width_m, self.oracle))
-                  >= self.params.max_slip):
-            self._skip("slip_out_of_range")
-            return
+        W, cpr = g.track_width_m, g.counts_per_rad
+        xs = self.x.tolist()
+        v_mid = xs[lm.IV] - 0.5 * tau * xs[lm.IVD]
+        om_mid = xs[lm.IOM] - 0.5 * tau * xs[lm.IOMD]
+        half_w = 0.5 * W
+        v_w = (v_mid + -half_w * om_mid, v_mid + half_w * om_mid)  # mean wheel speeds [m/s]
+        H = self._H_odo
+        if not self.slip_model:  # Eq. 15-16
+            gain = tau * cpr / g.wheel_radius_m
+            y = np.array([dcounts[0] - gain * v_w[0], dcounts[1] - gain * v_w[1]])
+            dz = (gain, gain)
+        else:  # Eq. 37-41
+            if not (math.isfinite(torque[0]) and math.isfinite(torque[1])):
+                self._skip("torque_nan")
+                return
+            if self.oracle is not None:
+                r_w, k_s = self.oracle.wheel_radius_m, self.oracle.k_s
+            else:
+                r_w, k_s = (xs[lm.IRL], xs[lm.IRR]), (xs[lm.IKL], xs[lm.IKR])
+            sigma = tuple(1.0 if v >= 0.0 else -1.0 for v in v_w)
+            if any(abs(sigma[i] * torque[i] / k_s[i]) >= self.params.max_slip for i in (0, 1)):
+                self._skip("slip_out_of_range")
+                return
+            den = [k_s[i] - sigma[i] * torque[i] for i in (0, 1)]
+            y = np.array([dcounts[i] - tau * cpr * v_w[i] * k_s[i] / (r_w[i] * den[i])
+                          for i in (0, 1)])
+            dz = (tau * cpr * k_s[0] / (r_w[0] * den[0]),  # Eq. 38
+                  tau * cpr * k_s[1] / (r_w[1] * den[1]))
+            if self.oracle is None:
+                H[0, lm.IRL] = -(dz[0] * v_w[0]) / r_w[0]  # Eq. 40
+                H[1, lm.IRR] = -(dz[1] * v_w[1]) / r_w[1]
+                H[0, lm.IKL], H[1, lm.IKR] = (  # Eq. 41
+                    -tau * cpr * sigma[i] * torque[i] * v_w[i] / (r_w[i] * (den[i] * den[i]))
+                    for i in (0, 1))
+        d_om = (-dz[0] * 0.5 * W, dz[1] * 0.5 * W)  # Eq. 39
+        H[0, lm.IV], H[1, lm.IV] = dz
+        H[0, lm.IOM], H[1, lm.IOM] = d_om
+        H[0, lm.IVD], H[1, lm.IVD] = -0.5 * tau * dz[0], -0.5 * tau * dz[1]
+        H[0, lm.IOMD], H[1, lm.IOMD] = -0.5 * tau * d_om[0], -0.5 * tau * d_om[1]
         x0, P0 = self.x, self.P
-        W, cpr, soil = g.track_width_m, g.counts_per_rad, self.oracle
-        y = dcounts - lo.odo_slip_hx(self.x, tau, torque, W, cpr, soil)
-        self._update("odo", t, y, lo.odo_slip_H(self.x, tau, torque, W, cpr, soil), self._R_odo)
+        self._update("odo", t, y, H, self._R_odo)
         if self.estimates_soil and np.any(self.x[lm.IRL:] <= 0.0):
             self.x, self.P = x0, P0
             del self.history["odo"][-1]
             self._skip("odo_invalid_soil")
 
     def _update_bearing(self, t: float, z: float) -> None:
-        """One bearing (Lindgren Eq. 17): nearest-innovation association, χ² gate, update."""
+        """One bearing (Lindgren Eq. 17): nearest-innovation association, χ² gate, update.
+
+        The beacon chosen is the one with the smallest wrapped innovation, i.e. the largest
+        ``cos(z + θ - atan2(Y_b - y, X_b - x))`` (:func:`.observations.nearest_beacon`); its
+        innovation and Jacobian are :func:`.bearing_residual` and :func:`.bearing_H`.
+        """
         if self.beacons_xy is None:
             self._skip("bearing_no_map")
             return
-        j, y = lo.nearest_beacon(self.x, z, self.beacons_xy)
-        H = lo.bearing_H(self.x, self.beacons_xy[j])
-        if not self._update("bearing", t, np.array([y]), H, self._R_bearing, self._gate):
+        px, py, th = self.x[:3].tolist()
+        dx_all, dy_all = self._bx - px, self._by - py
+        j = int(np.argmax(np.cos((z + th) - np.arctan2(dy_all, dx_all))))
+        dx, dy = float(dx_all[j]), float(dy_all[j])
+        y = wrap_angle(z - wrap_angle(math.atan2(dy, dx) - th))
+        r2 = dx * dx + dy * dy
+        h = self._h_bearing
+        h[lm.IX], h[lm.IY] = dy / r2, -dx / r2
+        if not self._update_scalar("bearing", t, y, h, self._R_bearing[0, 0], self._gate):
             self._skip("bearing_gated")

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from slipenv.diagnose.fit import Fit, Problem, fit
+from slipenv.diagnose.numbers import determined, estimate, num
 
 GEOMETRIC = ("rolling_radius", "track_width")
 MAX_VIF = 25.0  # variance inflation above which radii ratio and width are called confounded
@@ -96,14 +97,18 @@ def calibration(problem: Problem, chosen: Fit | None) -> dict[str, Any] | None:
     separable = vif < MAX_VIF
     ratio = theta[1] / theta[0]
     ratio_se = float(_delta_se(lambda th: np.array([th[1] / th[0]]), theta, cov)[0])
+    vif_text = f"{vif:.1f}" if np.isfinite(vif) else "unbounded"
     note = ("this log separates the wheel-radius ratio from the track width "
-            f"(variance inflation {vif:.1f})" if separable else
+            f"(variance inflation {vif_text})" if separable else
             "on this log the left/right wheel-radius ratio and the track width are confounded "
-            f"(variance inflation {vif:.0f} of the width when both are fitted: its turns all "
+            f"(variance inflation {vif_text} of the width when both are fitted: its turns all "
             "have about the same wheel-speed ratio); the split between them is not determined, "
             "only the turn scale and distance scale are — drive turns both ways, or straight "
             "runs, to separate them")
+    config_ok = all(determined(v, e) for v, e in
+                    ((r_mean, se_mean), (theta[2], se[2]), (theta[0], se[0]), (theta[1], se[1])))
     return {
+        "config_determined": bool(config_ok),
         "diff_drive_controller": {
             "wheel_radius": float(r_mean), "wheel_separation": float(theta[2]),
             "left_wheel_radius_multiplier": float(theta[0] / r_mean),
@@ -133,19 +138,21 @@ def markdown(cal: dict[str, Any]) -> list[str]:
         "## Odometry calibration", "",
         "Values for a differential-drive controller's config (ROS `diff_drive_controller`):",
         "", "```yaml",
-        f"wheel_radius: {ddc['wheel_radius']:.6f}        # nominal {nom['wheel_radius_m']:.6f}",
-        f"wheel_separation: {ddc['wheel_separation']:.6f}    # nominal "
-        f"{nom['wheel_separation_m']:.6f}",
-        f"left_wheel_radius_multiplier: {ddc['left_wheel_radius_multiplier']:.6f}",
-        f"right_wheel_radius_multiplier: {ddc['right_wheel_radius_multiplier']:.6f}",
+        f"wheel_radius: {num(ddc['wheel_radius'], '.6f')}        # nominal "
+        f"{num(nom['wheel_radius_m'], '.6f')}",
+        f"wheel_separation: {num(ddc['wheel_separation'], '.6f')}    # nominal "
+        f"{num(nom['wheel_separation_m'], '.6f')}",
+        f"left_wheel_radius_multiplier: {num(ddc['left_wheel_radius_multiplier'], '.6f')}",
+        f"right_wheel_radius_multiplier: {num(ddc['right_wheel_radius_multiplier'], '.6f')}",
         "wheel_separation_multiplier: 1.0", "```", "",
-        "| quantity | value | standard error |", "|---|---|---|",
-        *[f"| {k} | {cal[k][0]:.6g} | {cal[k][1]:.2g} |" for k in
+        *([] if cal.get("config_determined", True) else
+          ["**Not determined by this log**: a standard error below exceeds its value; do not "
+           "put these numbers into a config.", ""]),
+        "| quantity | value ± standard error |", "|---|---|",
+        *[f"| {k} | {estimate(cal[k][0], cal[k][1])} |" for k in
           ("wheel_radius_m", "wheel_separation_m", "left_wheel_radius_m", "right_wheel_radius_m",
            "right_left_radius_ratio")],
-        f"| turn scale c_θ (determined) | {det['turn_scale'][0]:.5f} | "
-        f"{det['turn_scale'][1]:.2g} |",
-        f"| distance scale c_d (determined) | {det['distance_scale'][0]:.5f} | "
-        f"{det['distance_scale'][1]:.2g} |", "",
+        f"| turn scale c_θ | {estimate(*det['turn_scale'], spec='.5f')} |",
+        f"| distance scale c_d | {estimate(*det['distance_scale'], spec='.5f')} |", "",
         f"What this log separates: {cal['note']}.", "",
     ]

@@ -43,14 +43,24 @@ def _has_truth(folder: Path) -> bool:
 
 def diagnose(logs: list[Log], where: str, *, progress: bool = False) -> tuple[dict, object]:
     """Run the diagnosis on ``logs``; (JSON report, context for the human report)."""
-    from slipenv.diagnose.fit import Problem
+    import numpy as np
+
+    from slipenv.diagnose.fit import FitError, Problem
     from slipenv.diagnose.replay import build_segments
     from slipenv.diagnose.report import build_report
     from slipenv.diagnose.select import select
 
-    problem = Problem.from_segments(build_segments(logs))
-    sel = select(problem, progress=progress, logs=logs)
-    return build_report(sel, problem, logs, where), (sel, problem)
+    try:
+        problem = Problem.from_segments(build_segments(logs))
+        sel = select(problem, progress=progress, logs=logs)
+        return build_report(sel, problem, logs, where), (sel, problem)
+    except (FitError, np.linalg.LinAlgError, FloatingPointError) as exc:
+        names = ", ".join(str(log.path) if log.path else "<memory>" for log in logs)
+        raise DiagnosisError(f"{where}: the diagnosis of {names} failed: {exc}") from exc
+
+
+class DiagnosisError(ValueError):
+    """A diagnosis that could not be computed; the message names the log(s)."""
 
 
 def main(args) -> int:
@@ -91,24 +101,34 @@ def main(args) -> int:
 
 
 def summary(report: dict, seconds: float | None = None) -> str:
-    """A few lines for the terminal."""
+    """A few lines for the terminal (never ``inf``/``nan``; see ``numbers.py``)."""
+    from slipenv.diagnose.numbers import better, estimate, num
+
     g = report["gain"]
     lines = [f"cause: {report['cause']}"
              + (f" (also: {', '.join(report['also'])})" if report["also"] else "")]
-    lines += [f"  {k} = {v[0]:.6g} ± {v[1]:.2g}" for k, v in report["parameters"].items()]
-    lines.append(f"held-out {g['metric']}: {g['before']:.4g} -> {g['after']:.4g} "
-                 f"({100 * g['relative']:.1f} % better)")
+    lines += [f"  {k} = {estimate(v[0], v[1])}" for k, v in report["parameters"].items()]
+    lines.append(f"held-out {g['metric']}: {num(g['before'])} -> {num(g['after'])} "
+                 f"({better(g['relative'])})")
     cal = report.get("calibration")
     if cal:
         ddc = cal["diff_drive_controller"]
         turn = cal["determined"]["turn_scale"]
-        lines.append(f"odometry config: wheel_radius {ddc['wheel_radius']:.6g} m, "
-                     f"wheel_separation {ddc['wheel_separation']:.6g} m, radius multipliers "
-                     f"L {ddc['left_wheel_radius_multiplier']:.5f} / R "
-                     f"{ddc['right_wheel_radius_multiplier']:.5f}")
-        lines.append(f"  turn scale {turn[0]:.5f} ± {turn[1]:.2g} (determined); "
+        ok = cal.get("config_determined", True)
+        lines.append(("odometry config: " if ok else "odometry config (NOT determined by this "
+                      "log, do not use): ")
+                     + f"wheel_radius {num(ddc['wheel_radius'], '.6g')} m, "
+                     f"wheel_separation {num(ddc['wheel_separation'], '.6g')} m, radius "
+                     f"multipliers L {num(ddc['left_wheel_radius_multiplier'], '.5f')} / R "
+                     f"{num(ddc['right_wheel_radius_multiplier'], '.5f')}")
+        lines.append(f"  turn scale {estimate(turn[0], turn[1], '.5f')}; "
                      + ("radius ratio and track width separable on this log" if cal["separable"]
                         else "radius ratio and track width confounded on this log"))
+    undetermined = [k for k, ok in report.get("determined", {}).items() if not ok]
+    if undetermined:
+        lines.append(f"warning: {', '.join(undetermined)} not determined by this log "
+                     "(standard error larger than the estimate)")
+    lines += [f"warning: {w}" for w in report.get("warnings", [])]
     if seconds is not None:
         lines.append(f"({report['segments']['count']} segments, {seconds:.1f} s)")
     return "\n".join(lines)

@@ -136,7 +136,8 @@ def unpack(effects: tuple[str, ...], x) -> dict[str, Term]:
 
 
 def param_count(effects: tuple[str, ...]) -> int:
-    """Number of fitted parameters of ``effects``."""
+    """Number of fitted parameters of ``effects`` (a layout field counts: chosen from the
+    data, it is a degree of freedom of the model)."""
     return sum(len(effect(name).fields()) for name in effects)
 
 
@@ -156,6 +157,11 @@ def layout(effects: tuple[str, ...], seg: Segments) -> list[tuple[str, Bound]]:
 def _flat(name: str, params: Term) -> dict[str, float]:
     eff = effect(name)
     return dict(zip((f"{name}.{f}" for f in eff.fields()), eff.to_vector(params), strict=True))
+
+
+class FitError(ValueError):
+    """A least-squares fit that failed (non-finite residuals, a singular problem); the caller
+    adds the log's name (``cli.diagnose``)."""
 
 
 def fit(problem: Problem, effects: tuple[str, ...], index: np.ndarray | None = None,
@@ -204,23 +210,39 @@ def fit(problem: Problem, effects: tuple[str, ...], index: np.ndarray | None = N
     lo = np.array([b.lower for _, b in specs])
     hi = np.array([b.upper for _, b in specs])
     scale = np.array([b.scale for _, b in specs])
-
-    def fun(x: np.ndarray) -> np.ndarray:
-        return problem.residuals(effects, unpack(effects, x), seg)[mask].ravel()
+    # layout fields (``Effect.fixed``): set by the start, never moved by the optimiser
+    fixed = {f"{name}.{f}" for name in effects for f in effect(name).fixed}
+    free = np.array([n not in fixed for n in names])
 
     def solve(values: dict[str, float], evals: int):
-        x0 = np.clip([values.get(n, bound[n].start) for n in names], lo + 1e-12 * np.abs(lo),
-                     hi - 1e-12 * np.abs(hi))
-        return least_squares(fun, x0, bounds=(lo, hi), x_scale=scale, method="trf",
-                             xtol=1e-8, ftol=1e-8, max_nfev=evals * len(specs))
+        full = np.clip([values.get(n, bound[n].start) for n in names], lo + 1e-12 * np.abs(lo),
+                       hi - 1e-12 * np.abs(hi))
+
+        def fun(xf: np.ndarray) -> np.ndarray:
+            x = full.copy()
+            x[free] = xf
+            return problem.residuals(effects, unpack(effects, x), seg)[mask].ravel()
+
+        try:
+            sol = least_squares(fun, full[free], bounds=(lo[free], hi[free]),
+                                x_scale=scale[free], method="trf", xtol=1e-8, ftol=1e-8,
+                                max_nfev=evals * int(free.sum()))
+        except (ValueError, np.linalg.LinAlgError, FloatingPointError) as exc:
+            raise FitError(f"the least-squares fit of {'+'.join(effects)} failed: "
+                           f"{type(exc).__name__}: {exc}") from exc
+        x = full.copy()
+        x[free] = sol.x
+        jac = np.zeros((sol.jac.shape[0], len(names)))
+        jac[:, free] = sol.jac
+        return x, jac, sol.fun
 
     if len(starts) > 1:
         trials = [solve(s, TRIAL_BUDGET) for s in starts]
-        best = min(trials, key=lambda sol: float(np.mean(sol.fun**2)))
-        starts = [dict(zip(names, best.x.tolist(), strict=True))]
-    sol = solve(starts[0], budget)
-    cov = _cluster_covariance(problem, effects, seg, sol.x, sol.jac)
-    return Fit(effects, names, sol.x, cov, float(np.sqrt(np.mean(sol.fun**2))), len(seg))
+        best = min(trials, key=lambda sol: float(np.mean(sol[2]**2)))
+        starts = [dict(zip(names, best[0].tolist(), strict=True))]
+    x, jac, res = solve(starts[0], budget)
+    cov = _cluster_covariance(problem, effects, seg, x, jac)
+    return Fit(effects, names, x, cov, float(np.sqrt(np.mean(res**2))), len(seg))
 
 
 def _cluster_covariance(problem: Problem, effects, seg: Segments, x, jac) -> np.ndarray:
@@ -229,11 +251,11 @@ def _cluster_covariance(problem: Problem, effects, seg: Segments, x, jac) -> np.
     k = res.shape[-1]
     cluster = np.repeat(np.nonzero(seg.gt_ok)[0], k)
     r = res[seg.gt_ok].ravel()
-    p = len(x)
+    p = max(int(np.sum(np.any(jac != 0, axis=0))), 1)  # parameters the data move
     a = jac.T @ jac
     a_inv = np.linalg.pinv(a)
     g = len(seg)
-    scores = np.zeros((g, p))
+    scores = np.zeros((g, jac.shape[1]))
     np.add.at(scores, cluster, jac * r[:, None])
     meat = scores.T @ scores
     robust = a_inv @ meat @ a_inv * (g / max(g - p, 1))

@@ -12,6 +12,7 @@ import numpy as np  # noqa: E402
 
 from slipenv.diagnose import replay  # noqa: E402
 from slipenv.diagnose.fit import Problem  # noqa: E402
+from slipenv.diagnose.numbers import num  # noqa: E402
 from slipenv.diagnose.select import Selection  # noqa: E402
 
 _MAX_SEGMENTS = 40  # segments drawn in the overlay (the first ones of the first log)
@@ -114,7 +115,7 @@ def candidates(path: Path, sel: Selection) -> Path:
     colors = ["tab:green" if c.significant else "tab:gray" for c in rows]
     ax.barh(y, [c.error_ratio for c in rows], color=colors)
     ax.axvline(1.0, color="k", lw=0.8)
-    ax.set_yticks(y, [f"{c.name} (p={c.p_value:.1g})" for c in rows], fontsize=8)
+    ax.set_yticks(y, [f"{c.name} (p={num(c.p_value, '.1g')})" for c in rows], fontsize=8)
     ax.invert_yaxis()
     ax.set_xlabel("held-out mean squared error / nominal (green: significant)")
     return _save(fig, path)

@@ -26,12 +26,18 @@ from pathlib import Path
 
 import numpy as np
 
+from slipenv.diagnose.numbers import determined, num
 from slipenv.diagnose.segments import wheel_sides
 from slipenv.logs.log import Log
 
 BLOCK_S = 10.0  # [s] held-out block length
 MIN_TURN_RAD_S = 0.05  # [rad/s] nominal yaw rate below which a sample does not inform η
 STILL_MPS = 0.01  # [m/s] wheel speed below which the vehicle stands still (gyro bias)
+# Plausible effective track width over the nominal one, W_eff/W = 1/η: a tyre's contact line
+# moves a wheel width at most inwards; skid-steer turning losses give up to several W (BorealTC's
+# Husky: 1.5 W on hard floors, 5-6 W pooled on snow, docs/real_data.md). 10 W (η = 0.1) is
+# beyond any of them: a gyro that hardly follows the wheels, a wrong axis or wheel mapping.
+PLAUSIBLE_WIDTH_RATIO = (0.67, 10.0)
 CANNOT = ["rolling_radius (no position truth: distance travelled is unobserved)",
           "torque_slip and soil_patch (no calibrated torque and no position truth)",
           "slope_side_slip, combined_slip (no position truth: sideways motion is unobserved)",
@@ -94,13 +100,17 @@ def analyse(logs: list[Log], where: str) -> dict:
     cause = "none"
     if pooled.get("significant"):
         cause = "track_width"
-    also = ["turning_slip"] if pooled.get("turning_significant") else []
+    also = ["turning_slip"] if cause != "none" and pooled.get("turning_significant") else []
     params = {}
     if cause != "none":
         params["track_width_m"] = pooled["effective_track_width_m"]
+    warnings = [f"{name}: {w}" for name, g in sorted(results.items())
+                for w in g.get("warnings", [])]
     return {
         "format": "slipenv-diagnosis/1", "log": where, "cause": cause, "also": also,
         "parameters": params,
+        "determined": {"track_width_m": bool(pooled.get("determined", False))},
+        "warnings": warnings,
         "gain": {"metric": "yaw_rate_rmse_rad_s", "before": pooled.get("rmse_before"),
                  "after": pooled.get("rmse_after"), "relative": pooled.get("relative"),
                  "evaluated_on": "held-out (odd 10 s blocks)"},
@@ -163,6 +173,18 @@ def _analyse_group(items: list[tuple[Log, dict]]) -> dict:
         a = float(np.sqrt(np.mean((gyro[test_runs] - xc[0] * kin[test_runs] - xc[1]) ** 2)))
         cross = {"before": b, "after": a, "relative": 1.0 - a / b}
     w = items[0][0].meta.track_width_m
+    w_eff, w_se = (w / eta, w * eta_se / eta**2) if eta != 0 else (math.inf, math.inf)
+    ok = determined(w_eff, w_se)
+    low, high = PLAUSIBLE_WIDTH_RATIO
+    plausible = bool(ok and low * w <= w_eff <= high * w)
+    warnings = []
+    if not ok:
+        warnings.append(f"effective track width not determined (yaw efficiency {eta:.3g} ± "
+                        f"{eta_se:.2g}: the gyro's yaw rate hardly follows the wheels')")
+    elif not plausible:
+        warnings.append(f"effective track width {w_eff:.3g} m is implausible for a nominal "
+                        f"{w:.3g} m track (outside {low:g}-{high:g} times): check the gyro axis "
+                        "and sign, the wheel names and the encoder scale; not determined")
     straight = (np.abs(d["kin"]) < 0.05) & (0.5 * np.abs(d["v_l"] + d["v_r"]) > 0.2)
     both = np.stack([d["current_left"], d["current_right"]])
     count = np.isfinite(both).sum(axis=0)
@@ -171,12 +193,13 @@ def _analyse_group(items: list[tuple[Log, dict]]) -> dict:
     return {
         "runs": len(items), "samples_turning": int(turn.sum()),
         "yaw_efficiency": [eta, eta_se],
-        "effective_track_width_m": [w / eta, w * eta_se / eta**2],
+        "effective_track_width_m": [w_eff, w_se],
+        "determined": plausible, "warnings": warnings,
         "gyro_bias_rad_s": bias,
         "rmse_before": before, "rmse_after": after, "relative": 1.0 - after / before,
         "turning_relative": 1.0 - after2 / after if after > 0 else 0.0,
         "eta_rho_term": float(x2[1]),
-        "significant": bool(abs(1.0 - eta) > 3 * eta_se and after < 0.9 * before),
+        "significant": bool(plausible and abs(1.0 - eta) > 3 * eta_se and after < 0.9 * before),
         "turning_significant": bool(after2 < 0.95 * after),
         "current_straight_median_a": _median(current[straight]),
         "current_turning_median_a": _median(current[turning]),
@@ -199,10 +222,13 @@ def summary(result: dict) -> str:
             lines.append(f"{name:<12} {g['runs']:>4}  {g.get('note', '')}")
             continue
         e, w = g["yaw_efficiency"], g["effective_track_width_m"]
-        cur = [f"{v:.2f}" if v is not None else "-" for v in
+        cur = [num(v, ".2f") if v is not None else "-" for v in
                (g["current_straight_median_a"], g["current_turning_median_a"])]
-        lines.append(f"{name:<12} {g['runs']:>4} {e[0]:>7.3f}±{e[1]:<6.3f} {w[0]:>7.3f}±"
-                     f"{w[1]:<6.3f} {100 * g['relative']:>8.0f}% {cur[0]:>10} {cur[1]:>7}")
+        width = (f"{num(w[0], '>7.3f')}±{num(w[1], '<6.3f')}" if g.get("determined")
+                 else f"{'not determined':>14}")
+        lines.append(f"{name:<12} {g['runs']:>4} {num(e[0], '>7.3f')}±{num(e[1], '<6.3f')} "
+                     f"{width} {num(100 * g['relative'], '>8.0f')}% {cur[0]:>10} {cur[1]:>7}")
+    lines += [f"warning: {w}" for w in result.get("warnings", [])]
     lines.append("cannot be concluded without ground truth: "
                  + "; ".join(result["cannot_conclude"]))
     return "\n".join(lines)

@@ -26,6 +26,11 @@ Per sample interval k (from sample k to k+1), with the terms' hooks in brackets:
    round a turn); none when no term gives one;
 6. midpoint integration in the slope plane, mapped to the world by ``geometry.tilt_matrix``.
 
+A 4WS rover (``rover4ws``, steering angles logged) replaces steps 3-4 by
+:func:`rover_body_motion`: the body's forward and lateral travel and turn that best explain
+every wheel's ground travel along its steered heading with no sideways sliding; the track
+width W (``track_width``) sets the wheels' lateral offsets ±W/2.
+
 The gyro channel replays heading from the gyro alone, through the terms' ``gyro_rate``
 (``gyro_bias``: b subtracted), for comparison with the ground-truth heading.
 """
@@ -55,7 +60,8 @@ Model = Mapping[str, object]
 
 __all__ = ["SUPPORTED_KINDS", "Model", "Segments", "build_segments", "check_logs",
            "choose_duration", "heading_residuals", "pose_residuals", "simulate",
-           "simulate_gyro_heading", "slips", "wheel_sides"]
+           "simulate_gyro_heading", "rover_body_motion", "rover_twist", "slips",
+           "wheel_sides"]
 
 
 def slips(seg: Segments, model: Model, pos: np.ndarray | None = None) -> np.ndarray:
@@ -79,6 +85,21 @@ def simulate(seg: Segments, model: Model) -> np.ndarray:
         radius = term.wheel_radius(seg, radius)
     d = radius[:, None, :] * seg.dphi
     g = d - slips(seg, model) * np.abs(d) if terms else d
+    if seg.steer is not None and seg.wheel_x is not None:
+        track = seg.track
+        for term in terms:
+            track = term.track_width(seg, track)
+        ds, dlat, dtheta = rover_body_motion(seg, g, track)
+        theta = seg.anchor_heading()[:, None] + np.concatenate(
+            [np.zeros((len(seg), 1)), np.cumsum(dtheta, axis=1)], axis=1)
+        mid = theta[:, :-1] + 0.5 * dtheta
+        angles = [b for term in terms if (b := term.slip_angle(seg, ds, dtheta, mid))
+                  is not None]
+        if angles:
+            dlat = dlat + np.abs(ds) * np.tan(sum(angles))
+        du = ds * np.cos(mid) - dlat * np.sin(mid)
+        dv = ds * np.sin(mid) + dlat * np.cos(mid)
+        return _to_world(seg, du, dv, theta)
     left = g[..., seg.sides == 0].mean(axis=-1)
     right = g[..., seg.sides == 1].mean(axis=-1)
     for term in terms:
@@ -98,6 +119,40 @@ def simulate(seg: Segments, model: Model) -> np.ndarray:
         dl = np.abs(ds) * np.tan(sum(angles))
         du, dv = du - dl * np.sin(mid), dv + dl * np.cos(mid)
     return _to_world(seg, du, dv, theta)
+
+
+def rover_body_motion(seg: Segments, g: np.ndarray, track: np.ndarray | float
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Body forward, lateral travel [m] and turn [rad] per interval of a 4WS rover, (S, L-1).
+
+    Each wheel i at (x_i, ±W/2), steered by δ_i, rolls g_i along its heading and does not
+    slide sideways (Reina §2, the kinematic double-Ackermann model the commands come from):
+    the contact point's travel (du - y_i dθ, dv + x_i dθ) has component g_i along
+    (cos δ_i, sin δ_i) and 0 across. The 2 n equations in (du, dv, dθ) are solved by least
+    squares per interval (exact when the wheels agree with one body motion).
+    """
+    w = np.asarray(track, dtype=float)
+    w = w[:, None, None] if w.ndim else w
+    y = (0.5 - seg.sides)[None, None, :] * w  # left (side 0) at +W/2
+    return rover_twist(g, seg.steer, np.broadcast_to(seg.wheel_x, seg.steer.shape), y)
+
+
+def rover_twist(g: np.ndarray, steer: np.ndarray, x: np.ndarray, y: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Least-squares body travel (du, dv, dθ) of wheels at body positions (x, y) [m], steered
+    by ``steer`` [rad], rolling ``g`` [m] without sideways sliding (arrays (..., n_wheels))."""
+    c, s = np.cos(steer), np.sin(steer)
+    x, y = np.broadcast_to(x, g.shape), np.broadcast_to(y, g.shape)
+    # Rows (c, s, x s - y c) = g_i and (-s, c, x c + y s) = 0: the normal matrix AᵀA does not
+    # depend on the steering, [[n, 0, -Σy], [0, n, Σx], [-Σy, Σx, Σ(x² + y²)]]; Aᵀb =
+    # (Σ c g, Σ s g, Σ (x s - y c) g).
+    n = g.shape[-1]
+    sx, sy, sr = x.sum(-1), y.sum(-1), (x * x + y * y).sum(-1)
+    t0, t1, t2 = (c * g).sum(-1), (s * g).sum(-1), ((x * s - y * c) * g).sum(-1)
+    # eliminate du, dv (rows 1-2), then dθ from row 3
+    turn = (t2 + (sy * t0 - sx * t1) / n) / (sr - (sx * sx + sy * sy) / n)
+    q = np.stack([(t0 + sy * turn) / n, (t1 - sx * turn) / n, turn], axis=-1)
+    return q[..., 0], q[..., 1], q[..., 2]
 
 
 def _to_world(seg: Segments, du: np.ndarray, dv: np.ndarray, theta: np.ndarray) -> np.ndarray:

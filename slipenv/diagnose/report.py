@@ -19,6 +19,14 @@ import numpy as np
 from slipenv.diagnose import calibration, geometry, replay
 from slipenv.diagnose.effects import effect
 from slipenv.diagnose.fit import Problem
+from slipenv.diagnose.numbers import (
+    better,
+    determined_map,
+    estimate,
+    implausible_geometry,
+    num,
+    percent,
+)
 from slipenv.diagnose.segments import Segments
 from slipenv.diagnose.select import ALPHA, MIN_DRIFT, MIN_GAIN, N_FOLDS, Selection
 from slipenv.estimators.consistency import consistency_report
@@ -142,15 +150,21 @@ def build_report(sel: Selection, problem: Problem, logs: list[Log], where: str) 
     covariance = {ch: {"names": f.names, "matrix": f.cov.tolist()}
                   for ch, f in sel.fits.items()}
     cal = calibration.calibration(problem, sel.fits.get("pose"))
+    nominal = {"wheel_radius_m": float(np.median(seg.radius)),
+               "track_width_m": float(np.median(seg.track))}
+    warnings = implausible_geometry(params, nominal)
+    if cal and warnings:
+        cal["config_determined"] = False
     return {
         "format": FORMAT, "log": where, "cause": sel.cause, "also": sel.also,
-        "parameters": params, "gain": gain, "candidates": candidates,
+        "parameters": params,
+        "determined": determined_map(params),
+        "gain": gain, "candidates": candidates,
         "covariance": covariance,
         **({"calibration": cal} if cal else {}),
         "effects": per_effect,
         "gains": g,
-        "nominal": {"wheel_radius_m": float(np.median(seg.radius)),
-                    "track_width_m": float(np.median(seg.track))},
+        "nominal": nominal, "warnings": warnings,
         "vehicle_kind": seg.kind, "wheels": seg.wheels,
         "segments": {"count": len(seg), "duration_s": float(np.median(seg.t[:, -1] - seg.t[:, 0])),
                      "folds": int(sel.folds.max()) + 1,
@@ -271,13 +285,20 @@ def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
     else:
         also = f" (also: {', '.join(report['also'])})" if report["also"] else ""
         lines += [f"**Cause: {cause}**{also} — {effect(cause).meaning}.", ""]
-        lines += ["| parameter | value | standard error |", "|---|---|---|"]
-        lines += [f"| `{k}` | {v[0]:.6g} | {v[1]:.2g} |" for k, v in report["parameters"].items()]
+        lines += ["| parameter | value ± standard error |", "|---|---|"]
+        lines += [f"| `{k}` | {estimate(v[0], v[1])} |" for k, v in report["parameters"].items()]
+        lines += [""]
+        undetermined = [k for k, ok in report.get("determined", {}).items() if not ok]
+        if undetermined:
+            lines += [f"**Not determined** by this log: {', '.join(undetermined)} (standard "
+                      "error larger than the estimate; JSON `determined` is false).", ""]
+    lines += [f"**Warning**: {w}." for w in report.get("warnings", [])]
+    if report.get("warnings"):
         lines += [""]
     if report.get("calibration"):
         lines += calibration.markdown(report["calibration"])
-    lines += [f"Held-out {g['metric']}: **{g['before']:.4g} → {g['after']:.4g}** "
-              f"({100 * g['relative']:.1f} % better), each segment predicted by a model "
+    lines += [f"Held-out {g['metric']}: **{num(g['before'])} → {num(g['after'])}** "
+              f"({better(g['relative'])}), each segment predicted by a model "
               "fitted without it.", ""]
     seg = report["segments"]
     lines += [f"{seg['count']} segments of about {seg['duration_s']:.1f} s, each replayed from "
@@ -292,10 +313,11 @@ def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
                          f"{c['untestable']} |")
         else:
             lh = c.get("long_horizon")
-            long = (f"{100 * lh['gain_relative']:.0f} %, {lh['p_value']:.2g}, "
-                    f"{max(lh['drift'], lh['turn_drift']):.4f}" if lh else "–")
-            lines.append(f"| {c['cause']} | {c['score']:.3f} | {100 * c['gain_relative']:.0f} % "
-                         f"| {c['p_value']:.2g} | {c['drift']:.4f} | {long} | "
+            long = (f"{percent(lh['gain_relative'], '.0f')}, {num(lh['p_value'], '.2g')}, "
+                    f"{num(max(lh['drift'], lh['turn_drift']), '.4f')}" if lh else "–")
+            lines.append(f"| {c['cause']} | {num(c['score'], '.3f')} | "
+                         f"{percent(c['gain_relative'], '.0f')} "
+                         f"| {num(c['p_value'], '.2g')} | {num(c['drift'], '.4f')} | {long} | "
                          f"{'yes' if c['significant'] else 'no'} |")
     t = report["thresholds"]
     lines += ["", f"Significant = one-sided paired sign-flip p < {t['alpha']}, held-out mean "
@@ -309,9 +331,10 @@ def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
               "| model | time-averaged NIS | 95 % band | lag-1 autocorrelation | band |",
               "|---|---|---|---|---|"]
     for name, c in report["consistency"].items():
-        lines.append(f"| {name} | {c['nis_mean']:.2f} | {c['nis_band_95'][0]:.2f}–"
-                     f"{c['nis_band_95'][1]:.2f} | {c['autocorrelation'][0]:+.2f} | "
-                     f"±{c['autocorrelation_band']:.2f} |")
+        lines.append(f"| {name} | {num(c['nis_mean'], '.2f')} | "
+                     f"{num(c['nis_band_95'][0], '.2f')}–{num(c['nis_band_95'][1], '.2f')} | "
+                     f"{num(c['autocorrelation'][0], '+.2f')} | "
+                     f"±{num(c['autocorrelation_band'], '.2f')} |")
     lines += ["", "S is the extended model's residual covariance: the nominal model's NIS says "
               "how many times its end errors exceed what remains unexplained.", "",
               "## Plots", ""]
@@ -326,5 +349,6 @@ def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
     if sim:
         lines += ["", "## PyBullet replay", "", sim.get("note", ""), "",
                   f"Position RMSE over the replayed segments: nominal world "
-                  f"{sim['rmse_nominal_m']:.4g} m, extended world {sim['rmse_extended_m']:.4g} m."]
+                  f"{num(sim['rmse_nominal_m'])} m, extended world "
+                  f"{num(sim['rmse_extended_m'])} m."]
     return "\n".join(lines) + "\n"

@@ -15,7 +15,7 @@ import numpy as np
 from slipenv.diagnose import geometry
 from slipenv.logs.log import Log
 
-SUPPORTED_KINDS = ("diff_drive", "skid_steer")
+SUPPORTED_KINDS = ("diff_drive", "skid_steer", "rover4ws")
 MIN_SEGMENT_SAMPLES = 5
 DURATIONS_S = (2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 15.0, 20.0, 30.0)  # [s] candidate lengths
 MIN_SEGMENTS = 32  # segments wanted for the held-out comparison
@@ -36,6 +36,20 @@ def wheel_sides(wheels: list[str]) -> np.ndarray:
                          "'...left...'/'...right...' or list an even number, left first")
     half = len(wheels) // 2
     return np.array([0] * half + [1] * half)
+
+
+def wheel_x(wheels: list[str], wheelbase_m: float) -> np.ndarray:
+    """Longitudinal offset of each wheel from the axle midpoint [m] (rover4ws): +L/2 for
+    'front' in the name, -L/2 for 'rear'/'back', by order otherwise (front pair first)."""
+    names = [w.lower() for w in wheels]
+    front = ["front" in n for n in names]
+    rear = ["rear" in n or "back" in n for n in names]
+    if all(f != r for f, r in zip(front, rear, strict=True)):
+        return np.array([0.5 * wheelbase_m if f else -0.5 * wheelbase_m for f in front])
+    if len(wheels) != 4:
+        raise ValueError(f"cannot tell front from rear among rover wheels {wheels}: name them "
+                         "'front...'/'rear...' or list four, front pair first")
+    return np.array([0.5, 0.5, -0.5, -0.5]) * wheelbase_m
 
 
 def _fill(values: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -78,6 +92,8 @@ class Segments:
     sides: np.ndarray  # (n_wheels,) 0 left / 1 right
     wheels: list[str]
     kind: str
+    steer: np.ndarray | None = None  # (S, L-1, n_wheels) steering angle [rad] (rover4ws)
+    wheel_x: np.ndarray | None = None  # (n_wheels,) longitudinal wheel offsets [m] (rover4ws)
 
     def __len__(self) -> int:
         return len(self.t)
@@ -94,7 +110,7 @@ class Segments:
         """The segments at ``index`` (same padding)."""
         out = {}
         for name, value in self.__dict__.items():
-            is_batch = isinstance(value, np.ndarray) and name != "sides"
+            is_batch = isinstance(value, np.ndarray) and name not in ("sides", "wheel_x")
             out[name] = value[index] if is_batch else value
         return Segments(**out)
 
@@ -109,6 +125,11 @@ def check_logs(logs: list[Log]) -> None:
         if log.meta.kind not in SUPPORTED_KINDS:
             raise ValueError(f"{where}: vehicle kind {log.meta.kind!r} is not supported by the "
                              f"diagnosis (supported: {', '.join(SUPPORTED_KINDS)})")
+        if log.meta.kind == "rover4ws":
+            try:
+                wheel_x(log.wheels, float(log.meta.wheelbase_m or 0.0))
+            except ValueError as exc:
+                raise ValueError(f"{where}: {exc}") from None
         if log.meta.kind != first.meta.kind or log.wheels != first.wheels:
             raise ValueError(f"{where}: all logs diagnosed together must share the vehicle "
                              f"kind and wheel names ({first.meta.kind}, {first.wheels})")
@@ -156,12 +177,14 @@ def _assemble(pieces: list[tuple], logs: list[Log]) -> Segments:
     has_roll = all(p[3]["roll"] is not None for p in pieces)
     has_pitch = all(p[3]["pitch"] is not None for p in pieces)
     has_gyro = all(p[3]["gyro"] is not None for p in pieces)
+    has_steer = all(p[3].get("steer") is not None for p in pieces)
     t = np.zeros((s_count, length))
     dphi = np.zeros((s_count, length - 1, n_w))
     torque = np.zeros((s_count, length - 1, n_w)) if has_torque else None
     roll = np.zeros((s_count, length - 1)) if has_roll else None
     pitch = np.zeros((s_count, length - 1)) if has_pitch else None
     gyro = np.zeros((s_count, length - 1)) if has_gyro else None
+    steer = np.zeros((s_count, length - 1, n_w)) if has_steer else None
     beta = np.zeros((s_count, length - 1))
     pos = np.zeros((s_count, length - 1, 2))
     gt = np.full((s_count, length, 3), np.nan)
@@ -176,7 +199,7 @@ def _assemble(pieces: list[tuple], logs: list[Log]) -> Segments:
         gt[j, :n] = arr["gt"][a:b]
         gt_ok[j, :n] = arr["gt_ok"][a:b]
         for name, dest in (("torque", torque), ("roll", roll), ("pitch", pitch),
-                           ("gyro", gyro)):
+                           ("gyro", gyro), ("steer", steer)):
             if dest is not None:
                 dest[j, :n - 1] = arr[name][a:b - 1]
     return Segments(
@@ -188,6 +211,9 @@ def _assemble(pieces: list[tuple], logs: list[Log]) -> Segments:
         track=np.array([logs[p[0]].meta.track_width_m for p in pieces]),
         log_index=np.array([p[0] for p in pieces]), start=np.array([p[1] for p in pieces]),
         sides=wheel_sides(wheels), wheels=list(wheels), kind=logs[0].meta.kind,
+        steer=steer,
+        wheel_x=(wheel_x(list(wheels), float(logs[0].meta.wheelbase_m))
+                 if logs[0].meta.kind == "rover4ws" else None),
     )
 
 
@@ -205,6 +231,9 @@ def log_arrays(log: Log) -> dict:
     for name in ("roll", "pitch"):
         out[name] = _interval_mean(_fill(log.signals[name], t)) if log.has(name) else None
     out["gyro"] = _interval_mean(_fill(log.signals["gyro_z"], t)) if log.has("gyro_z") else None
+    steer = [f"steer_{w}" for w in log.wheels]
+    out["steer"] = (np.column_stack([_interval_mean(_fill(log.signals[c], t)) for c in steer])
+                    if log.meta.kind == "rover4ws" and all(log.has(c) for c in steer) else None)
     x = np.interp(t, t[ok], gt[ok, 0])
     y = np.interp(t, t[ok], gt[ok, 1])
     out["pos"] = np.column_stack([_interval_mean(x), _interval_mean(y)])

@@ -65,6 +65,11 @@ class SlipEnvConfig:
         moved by a uniform offset within a disc of ``position_m`` [m] and turned by a uniform
         angle in ``±yaw_deg`` [deg] (default 2 cm, 1°; at most 1 m, 30°), so every seed is a
         different episode. The estimator is told the jittered start (a surveyed start pose).
+    camera_in_info : bool
+        With an estimator that uses the rear trace camera (``estimator="scomp"``), put each
+        rendered :class:`~slipenv.sensors.trace_camera.TraceFrame` (image and true trace) in
+        ``info["trace_frame"]`` (``None`` on steps without a frame). Default off: the frames
+        are 240 × 320 bytes each at 5 Hz. ``render()`` shows the last frame either way.
 
     Notes
     -----
@@ -98,6 +103,7 @@ class SlipEnvConfig:
                                  "effort": 0.05}
     )
     start_jitter: tuple = (0.02, 1.0)
+    camera_in_info: bool = False
 
     def __post_init__(self) -> None:
         _check_choice("vehicle", self.vehicle, _vehicle_names(), _vehicle_type())
@@ -139,6 +145,8 @@ class SlipEnvConfig:
             raise ValueError("start_jitter must be (position_m, yaw_deg) with 0 <= position_m "
                              f"<= 1 and 0 <= yaw_deg <= 30, got {jitter!r}")
         object.__setattr__(self, "start_jitter", (float(jitter[0]), float(jitter[1])))
+        if not isinstance(self.camera_in_info, bool):
+            raise ValueError(f"camera_in_info must be True or False, got {self.camera_in_info!r}")
         _check_options("reward_weights", self.reward_weights)
         _check_names("reward_weights", self.reward_weights, REWARD_TERMS, what="reward term")
         for key, value in self.reward_weights.items():

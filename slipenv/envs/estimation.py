@@ -14,6 +14,13 @@ name                        estimator
 ``slip_compensated``        Yamauchi: Endo + slip angle regression (kwarg ``beta_model``)
 ``lindgren_ekf``            Lindgren's EKF, kwarg ``scheme`` 1-4 (default 4, slip model)
 ``lindgren_oracle``         scheme 4 with the simulation's true R_w and k_s (privileged)
+``scomp``                   Reina: sComp odometry (Eq. 15-17) on the compass heading with
+                            the slip angle from FTrace on the 5 Hz rear trace camera
+                            (Eq. 1-2); kwargs ``slip_model`` (s_x(β) of Eq. 12 as a
+                            ``SlipRatioModel`` or its dict, default s_x = 0), ``ftrace`` (dict
+                            of ``FTraceConfig`` fields), ``camera`` (dict of
+                            ``TraceCameraConfig`` fields) and ``wheel`` (the watched wheel,
+                            default ``rear_left``). The env renders the camera for it.
 ==========================  ===========================================================
 """
 
@@ -109,6 +116,63 @@ def _lindgren_oracle(spec: VehicleSpec, context: dict, **kw: Any) -> Estimator:
     return _lindgren(spec, context, scheme=4, oracle=truth(), **kw)
 
 
+SLIP_MODEL_KEYS = ("s_x0", "k_per_rad", "beta0_rad")
+
+
+def _slip_ratio_model(value: Any):
+    from slipenv.estimators.reina import SlipRatioModel
+
+    if value is None:
+        return SlipRatioModel(0.0, 0.0, 0.0)
+    if isinstance(value, SlipRatioModel):
+        return value
+    if isinstance(value, dict):
+        unknown = sorted(set(value) - set(SLIP_MODEL_KEYS))
+        if unknown:
+            raise ValueError(f"unknown slip_model key(s) {unknown}; allowed: {SLIP_MODEL_KEYS}")
+        return SlipRatioModel(**{k: float(v) for k, v in value.items()})
+    raise ValueError(f"slip_model must be a SlipRatioModel or a dict of {SLIP_MODEL_KEYS}, got "
+                     f"{value!r}")
+
+
+def _options(cls, values: Any, option: str):
+    """``cls(**values)`` for a dict of its fields; an unknown field is a ``ValueError``."""
+    from dataclasses import fields
+
+    if values is None:
+        return cls()
+    if isinstance(values, cls):
+        return values
+    if not isinstance(values, dict):
+        raise ValueError(f"{option} must be a dict of {cls.__name__} fields, got {values!r}")
+    known = [f.name for f in fields(cls)]
+    unknown = sorted(set(values) - set(known))
+    if unknown:
+        raise ValueError(f"unknown {option} option(s) {unknown}; allowed: {known}")
+    return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
+
+
+def _scomp(spec: VehicleSpec, context: dict, slip_model: Any = None, ftrace: Any = None,
+           camera: Any = None, wheel: str = "rear_left") -> Estimator:
+    from dataclasses import replace
+
+    from slipenv.estimators.reina import FTraceConfig, FTraceSComp
+    from slipenv.sensors.trace_camera import TraceCameraConfig
+
+    mount = context.get("trace_camera")
+    if mount is None:
+        raise ValueError("estimator 'scomp' needs the env's rear trace camera "
+                         "(context['trace_camera'])")
+    cam_cfg = mount(_options(TraceCameraConfig, camera, "camera"), wheel)
+    ft_cfg = _options(FTraceConfig, ftrace, "ftrace")
+    # The trace model's wheel is the camera's wheel (contact point, rut width, ground height).
+    ft_cfg = replace(ft_cfg, wheel_xy_m=cam_cfg.wheel_xy_m, wheel_width_m=cam_cfg.wheel_width_m,
+                     ground_z_m=cam_cfg.ground_z_m)
+    return FTraceSComp(odometry_geometry(spec), _slip_ratio_model(slip_model),
+                       cam_cfg.nominal_camera(), ft_cfg,
+                       rear_to_cg_m=max(-cam_cfg.wheel_xy_m[0], 0.0))
+
+
 ESTIMATORS: dict[str, Callable[..., Estimator]] = {
     "dead_reckoning": _dead_reckoning,
     "gyrodometry": _gyrodometry,
@@ -116,6 +180,7 @@ ESTIMATORS: dict[str, Callable[..., Estimator]] = {
     "slip_compensated": _slip_compensated,
     "lindgren_ekf": _lindgren,
     "lindgren_oracle": _lindgren_oracle,
+    "scomp": _scomp,
 }
 
 

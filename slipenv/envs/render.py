@@ -4,14 +4,18 @@ PyBullet's TinyRenderer does not show debug lines, and a chase-camera image of a
 uniform soil says little about path following. The frame is a north-up map instead: soil
 background with a 1 m grid, the reference path, the vehicle's true trace, the estimator's
 trace, and the vehicle's chassis outline at its true pose. Pure numpy: no display and no
-plotting library needed.
+plotting library needed. Envs with the rear trace camera add :func:`render_camera_panel`
+beside the map: the last camera frame with FTrace's detected trace.
 """
 
 from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
+
+from slipenv.contracts.camera import PinholeCamera
 
 FRAME_HW = (480, 640)  # frame height, width [px]
 BACKGROUND = (200, 182, 148)  # soil
@@ -21,6 +25,8 @@ TRUE_RGB = (210, 30, 30)  # red: where the vehicle really went
 ESTIMATE_RGB = (240, 150, 0)  # orange: where the estimator thinks it went
 VEHICLE_RGB = (20, 20, 20)
 MARGIN_M = 1.0  # [m] around the path in view
+DETECTED_RGB = (40, 220, 40)  # green: the trace FTrace detected
+HELD_RGB = (240, 200, 0)  # yellow: the trace FTrace holds from an earlier frame
 
 
 class MapView:
@@ -117,3 +123,53 @@ def render_map(path_xy: np.ndarray, true_xy: np.ndarray, estimate_xy: np.ndarray
     outline = chassis_outline(x, y, yaw, *chassis_lw_m)
     draw_polyline(frame, view.to_px(outline), VEHICLE_RGB, 2)
     return frame
+
+
+def trace_line_px(camera: PinholeCamera, angle_rad: float, offset_m: float,
+                  wheel_xy_m: tuple[float, float], ground_z_m: float,
+                  length_m: float = 1.5) -> np.ndarray:
+    """Image points (column, row), shape (2, 2), of a trace line on the ground.
+
+    The line passes the wheel's contact x at lateral ``offset_m`` from the wheel-centre line
+    and runs backwards at ``angle_rad`` (body ground plane, counter-clockwise from body x).
+    """
+    xw, yw = wheel_xy_m
+    x1 = xw - length_m
+    ground = np.array([[xw, yw + offset_m],
+                       [x1, yw + offset_m + (x1 - xw) * math.tan(angle_rad)]])
+    return camera.ground_to_image(ground, ground_z_m)
+
+
+def render_camera_panel(image: np.ndarray | None, camera: PinholeCamera, detection,
+                        ground_z_m: float, panel_hw: tuple[int, int],
+                        wheel_xy_m: tuple[float, float] | None = None) -> np.ndarray:
+    """The rear camera frame as an RGB panel of ``panel_hw`` with FTrace's trace drawn on it.
+
+    Parameters
+    ----------
+    image : np.ndarray (rows, cols) uint8 or None
+        The grey camera frame; None (no frame yet) gives a grey panel.
+    camera : PinholeCamera
+        The nominal camera model (draws the detected line where FTrace believes it is).
+    detection : TraceDetection or None
+        FTrace's answer (green if detected this frame, yellow if held, nothing if none).
+    ground_z_m : float
+        Body-frame ground height [m].
+    panel_hw : tuple of int
+        Panel height and width [px].
+    wheel_xy_m : tuple of float, optional
+        Contact point of the watched wheel in the body frame [m] (default: the camera's
+        ``wheel_xy_m`` if it has one, else FTrace's default).
+    """
+    h, w = panel_hw
+    if image is None:
+        return np.full((h, w, 3), 96, np.uint8)
+    rgb = cv2.cvtColor(image, cv2.COLOR_GRAY2RGB)
+    if detection is not None and getattr(detection, "found", False):
+        xy = wheel_xy_m if wheel_xy_m is not None else (-0.30, 0.25)
+        uv = trace_line_px(camera, detection.angle_rad, detection.offset_m, xy, ground_z_m)
+        if np.all(np.isfinite(uv)):
+            colour = DETECTED_RGB if detection.status == "detected" else HELD_RGB
+            a, b = (tuple(int(round(v)) for v in pt) for pt in uv)
+            cv2.line(rgb, a, b, colour, 2, cv2.LINE_AA)
+    return cv2.resize(rgb, (w, h), interpolation=cv2.INTER_LINEAR)

@@ -28,9 +28,11 @@ from slipenv.envs.factory import (
     make_soil_map,
     make_vehicle,
 )
-from slipenv.envs.render import render_map
+from slipenv.envs.render import render_camera_panel, render_map
 from slipenv.paths import Path, sample_path
 from slipenv.sensors.onboard import SensorSuite
+from slipenv.sensors.trace_camera import TraceCameraConfig, TraceFrame
+from slipenv.sensors.trace_rig import TraceCameraRig, camera_config_for
 from slipenv.sim.simulator import PhysicsBlowUp, Simulator, VehicleTruth
 from slipenv.vehicles.kinematics import twist_to_commands
 from slipenv.vehicles.spec import VehicleSpec
@@ -88,6 +90,18 @@ class SlipEnv(gym.Env):
     cross-track error exceeds ``max_cross_track_m``; truncated at ``max_episode_s`` or on a
     physics blow-up (``info["truncation_reason"]``).
 
+    Rear trace camera (Reina §2): with ``estimator="scomp"`` the env mounts a 5 Hz camera
+    behind the rear-left wheel (:mod:`slipenv.sensors.trace_rig`), runs FTrace on every frame
+    and feeds its slip angle to sComp odometry, so observation index 6 is FTrace's β̂ and
+    indices 0-5 come from sComp. ``info["trace_detection"]`` holds FTrace's last
+    :class:`~slipenv.estimators.reina.TraceDetection` (``None`` while it reports no trace).
+    With ``camera_in_info=True`` the step that renders a frame also puts the
+    :class:`~slipenv.sensors.trace_camera.TraceFrame` (grey image and its true trace) in
+    ``info["trace_frame"]`` (``None`` on the other steps). In ``rgb_array`` mode ``render()``
+    then returns the map and the last camera frame side by side, (480, 1280, 3), FTrace's
+    trace drawn in green (yellow while held); ``env.unwrapped.trace_frame`` is the last raw
+    frame.
+
     Arguments: every field of :class:`~slipenv.envs.config.SlipEnvConfig` as a kwarg, plus
     ``render_mode`` (``"rgb_array"`` or ``"human"``).
 
@@ -135,8 +149,12 @@ class SlipEnv(gym.Env):
         self._trace: list[tuple[float, float]] = []  # true (x, y) per step, for render()
         self._trace_est: list[tuple[float, float]] = []
         self._path_xy: np.ndarray | None = None
+        self._camera_config: TraceCameraConfig | None = None
+        self._rig: TraceCameraRig | None = None
+        self._trace_frame_now: TraceFrame | None = None
         # Build the estimator once now so that bad ``estimator_kwargs`` fail at make time.
-        self._build_estimator()
+        if hasattr(self._build_estimator(), "update_trace") and self._camera_config is not None:
+            self._rig = TraceCameraRig(self._sim, self._camera_config)
 
     # -- read-only surface for experiments and tools ----------------------------------------
     @property
@@ -163,6 +181,11 @@ class SlipEnv(gym.Env):
     def physics_client_id(self) -> int:
         """The PyBullet client of this env's world (for benchmarks and rendering)."""
         return self._sim.client
+
+    @property
+    def trace_frame(self) -> TraceFrame | None:
+        """The rear trace camera's last frame (``estimator="scomp"``), else None."""
+        return None if self._rig is None else self._rig.last_frame
 
     @property
     def beacons_xy(self) -> np.ndarray | None:
@@ -218,6 +241,9 @@ class SlipEnv(gym.Env):
         frame = self._sensors.measure(truth, self.np_random)
         self.estimator = self._build_estimator()
         estimate = self.estimator.reset(x0, y0, yaw0, frame)
+        if self._rig is not None:
+            self._rig.reset(self.np_random)
+            self._camera_step(truth)
         self._steps = 0
         self._s_est = self._s_true = 0.0
         self._last_action = np.zeros(2, dtype=np.float32)
@@ -244,6 +270,8 @@ class SlipEnv(gym.Env):
             return obs, 0.0, False, True, info
         self._truth = truth
         frame = self._sensors.measure(truth, self.np_random)
+        if self._rig is not None:
+            self._camera_step(truth)
         estimate = self.estimator.update(frame)
         self._record(truth, estimate)
         obs = self._observe(estimate)
@@ -290,8 +318,16 @@ class SlipEnv(gym.Env):
             self._path_xy = np.stack([samples.x_m, samples.y_m], axis=1)
         x, y, _ = self._truth.position_m
         length_m, width_m, _ = self._vehicle.chassis_size_m
-        return render_map(self._path_xy, np.array(self._trace), np.array(self._trace_est),
+        view = render_map(self._path_xy, np.array(self._trace), np.array(self._trace_est),
                           (x, y, self._truth.yaw_rad), (length_m, width_m))
+        if self._rig is None:
+            return view
+        frame = self._rig.last_frame
+        panel = render_camera_panel(
+            None if frame is None else frame.image, self._rig.camera.camera,
+            getattr(self.estimator, "last_detection", None), self._rig.config.ground_z_m,
+            view.shape[:2], self._rig.config.wheel_xy_m)
+        return np.concatenate([view, panel], axis=1)
 
     def close(self) -> None:
         """Disconnect the physics client (idempotent; a dropped env is also released by the
@@ -311,7 +347,22 @@ class SlipEnv(gym.Env):
             "dt_s": self._dt_s,
             "beacons_xy": None if beacons is None else beacons.beacons_xy,
             "true_soil": lambda: true_soil()(),
+            "trace_camera": self._mount_camera,
         }
+
+    def _mount_camera(self, config: TraceCameraConfig, wheel: str) -> TraceCameraConfig:
+        """The rear trace camera ``config`` mounted behind ``wheel`` of this vehicle (called by
+        estimators that need the camera; the env then renders it for them)."""
+        self._camera_config = camera_config_for(self._sim, wheel, config)
+        return self._camera_config
+
+    def _camera_step(self, truth: VehicleTruth) -> None:
+        """Record the wheel traces; at the camera's rate render a frame and run FTrace on it."""
+        assert self._rig is not None and self.estimator is not None
+        trace = self._rig.step(truth, self.np_random)
+        self._trace_frame_now = trace
+        if trace is not None:
+            self.estimator.update_trace(trace.image)
 
     def _record(self, truth: VehicleTruth, estimate: PoseEstimate) -> None:
         if self.render_mode == "rgb_array":
@@ -344,9 +395,16 @@ class SlipEnv(gym.Env):
             "wheel_load_n": contact.load_n,
             "wheel_force_n": np.stack([contact.fx_n, contact.fy_n], axis=1),
             "wheel_resistance_n": contact.resistance_n,
+            "wheel_damper_n": contact.damper_n,
             "estimated_pose": np.array([estimate.x_m, estimate.y_m, estimate.yaw_rad]),
             "estimator_extras": dict(estimate.extras),
             "sensors": frame,
         }
+        if self._rig is not None:
+            detection = getattr(self.estimator, "last_detection", None)
+            info["trace_detection"] = detection if detection is not None and detection.found \
+                else None
+            if self.config.camera_in_info:
+                info["trace_frame"] = self._trace_frame_now
         info.update(extra)
         return info

@@ -17,6 +17,7 @@ from collections.abc import Callable
 EXPERIMENT_MODULES: dict[str, str] = {
     "lindgren": "slipenv.experiments.lindgren",
     "yamauchi": "slipenv.experiments.yamauchi",
+    "reina": "slipenv.experiments.reina",
 }
 
 

@@ -19,14 +19,24 @@ quantity                    allowed                    why
 ``pitch``                   |θ| <= π/2 rad             Z-Y-X Euler angle
 ``heading``, ``gt_yaw``     |ψ| <= 1e4 rad             may be unwrapped (1600 turns)
 ``gt_x``, ``gt_y``          |p| <= 2e7 m               half the Earth's circumference (UTM fits)
-``vehicle.wheel_radius_m``  (0, 5] m
-``vehicle.track_width_m``   (0, 20] m
-``vehicle.wheelbase_m``     (0, 50] m
+``vehicle.wheel_radius_m``  (0, 2] m                   the largest tyres (``VehicleSpec`` too)
+``vehicle.track_width_m``   (0, 10] m                  a mining truck's ~8 m (``VehicleSpec``)
+``vehicle.wheelbase_m``     (0, 20] m                  as ``VehicleSpec``
 ``vehicle.counts_per_rad``  (0, 1e7]
-``vehicle.mass_kg``         (0, 1e6] kg                1000 t
+``vehicle.mass_kg``         (0, 1e5] kg                100 t, as ``VehicleSpec``
 ``terrain.slope_deg``       [0, 60] deg                nothing drives up a steeper plane
 ``terrain.slope_downhill``  [-360, 360] deg
 ``_azimuth_deg``
+==========================  =========================  ==========================================
+
+Rates between consecutive samples (a single corrupted cell inside the ranges above still
+shows as a jump no vehicle makes):
+
+==========================  =========================  ==========================================
+rate                        allowed                    why
+==========================  =========================  ==========================================
+``enc_<wheel>`` / Δt         <= 1000 rad/s             as ``cmd_<wheel>`` (counts / counts_per_rad)
+``gt_x``, ``gt_y`` / Δt      <= 1000 m/s               three times the speed of sound
 ==========================  =========================  ==========================================
 
 Other (extra) columns are only required to be finite.
@@ -58,14 +68,50 @@ SIGNAL_BOUNDS: tuple[tuple[str, float, str], ...] = (
 
 # meta.json: key path -> (low, high, low inclusive); high is inclusive.
 META_BOUNDS: dict[tuple[str, str], tuple[float, float, bool]] = {
-    ("vehicle", "wheel_radius_m"): (0.0, 5.0, False),
-    ("vehicle", "track_width_m"): (0.0, 20.0, False),
-    ("vehicle", "wheelbase_m"): (0.0, 50.0, False),
+    ("vehicle", "wheel_radius_m"): (0.0, 2.0, False),
+    ("vehicle", "track_width_m"): (0.0, 10.0, False),
+    ("vehicle", "wheelbase_m"): (0.0, 20.0, False),
     ("vehicle", "counts_per_rad"): (0.0, 1e7, False),
-    ("vehicle", "mass_kg"): (0.0, 1e6, False),
+    ("vehicle", "mass_kg"): (0.0, 1e5, False),
     ("terrain", "slope_deg"): (0.0, 60.0, True),
     ("terrain", "slope_downhill_azimuth_deg"): (-360.0, 360.0, True),
 }
+
+
+# (column prefix or name, largest rate magnitude, unit); rates between consecutive measured
+# samples, encoders converted to wheel angle with ``vehicle.counts_per_rad``.
+RATE_BOUNDS: tuple[tuple[str, float, str], ...] = (
+    ("enc_", 1000.0, "rad/s"),
+    ("gt_x", 1000.0, "m/s"),
+    ("gt_y", 1000.0, "m/s"),
+)
+
+
+def rate_bound(column: str, wheels: list[str]) -> tuple[float, str] | None:
+    """(largest rate magnitude, unit) of a column whose jumps are bounded, else None."""
+    for name, limit, unit in RATE_BOUNDS:
+        if name.endswith("_") and column.startswith(name) and column[len(name):] in wheels:
+            return limit, unit
+        if column == name:
+            return limit, unit
+    return None
+
+
+def first_rate_out_of_bounds(t: np.ndarray, values: np.ndarray, limit: float,
+                             scale: float = 1.0) -> int | None:
+    """Index of the first sample whose change from the previous measured (finite) sample,
+    divided by ``scale`` and by the time between them, exceeds ``limit`` (None: none does).
+
+    ``t`` must be strictly increasing; NaN values are skipped (not measured).
+    """
+    ok = np.flatnonzero(np.isfinite(values) & np.isfinite(t))
+    if ok.size < 2:
+        return None
+    dt = np.diff(t[ok])
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        rate = np.abs(np.diff(values[ok])) / scale / dt
+    bad = np.flatnonzero(rate > limit)
+    return int(ok[bad[0] + 1]) if bad.size else None
 
 
 def signal_bound(column: str, wheels: list[str]) -> tuple[float, str] | None:

@@ -13,7 +13,12 @@ from typing import Any
 
 import numpy as np
 
-from slipenv.logs.bounds import first_out_of_bounds, signal_bound
+from slipenv.logs.bounds import (
+    first_out_of_bounds,
+    first_rate_out_of_bounds,
+    rate_bound,
+    signal_bound,
+)
 from slipenv.logs.errors import LogFormatError
 from slipenv.logs.meta import LogMeta, validate_meta
 
@@ -108,6 +113,18 @@ def validate_signals(
         i = int(back[0]) + 1
         raise fail(f"time not strictly increasing ({float(t[i])!r} s after "
                    f"{float(t[i - 1])!r} s)", "t", i)
+    for name, values in signals.items():
+        limit = rate_bound(name, meta.wheels)
+        if limit is None:
+            continue
+        scale = meta.counts_per_rad if name.startswith("enc_") else 1.0
+        k = first_rate_out_of_bounds(t, values, limit[0], scale)
+        if k is not None:
+            prev = int(np.flatnonzero(np.isfinite(values[:k]))[-1])
+            rate = abs(float(values[k]) - float(values[prev])) / scale / float(t[k] - t[prev])
+            raise fail(f"jump from {float(values[prev])!r} to {float(values[k])!r} is "
+                       f"physically implausible ({rate:.3g} {limit[1]} > {limit[0]:g} "
+                       f"{limit[1]}; see slipenv.logs.bounds)", name, k)
     if require_ground_truth:
         for name in GT_COLUMNS:
             if not np.isfinite(signals[name]).any():

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from slipenv.pybullet_quiet import import_pybullet
+from slipenv.sim.track_soil import TrackSoilInjector
 from slipenv.sim.wheel_soil import WheelSoilInjector
 from slipenv.terrain.terrain import TerrainSpec, build_terrain
 from slipenv.terramechanics.models import ForceModel
@@ -150,7 +151,9 @@ class Simulator:
             self.body = build_vehicle(vehicle, self.client, (0, 0, 1.0), (0, 0, 0, 1))
         else:
             self._rewind_body()
-        self.injector = WheelSoilInjector(
+        injector = (TrackSoilInjector if vehicle.track_model == "wong_chiang"
+                    else WheelSoilInjector)
+        self.injector: WheelSoilInjector | TrackSoilInjector = injector(
             self.client, vehicle, self.body, self.terrain.body_id, self.force_model,
             self.soil_map, self.dt_s,
         )

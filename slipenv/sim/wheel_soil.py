@@ -6,13 +6,25 @@ arithmetic (tiny numpy arrays per wheel cost more than the physics, DESIGN §6);
 ``applyExternalForce`` per loaded wheel at its contact patch and one at its centre for the
 resistance. The physics is not written here: the force law is the model's float kernel
 (`slipenv.terramechanics.wheel_kernel`), and the slip relaxation step, the two soil dampers
-and the resistance ramp are the plain functions of `slipenv.terramechanics.slip_dynamics`
-(sources and equations there). The soil under each wheel is sampled from the soil map once per
-control step (a wheel moves millimetres in one step; maps blend over decimetres).
+and the rate-independent (Coulomb-like) motion resistance are the plain functions of
+`slipenv.terramechanics.slip_dynamics` (sources and equations there). The soil under each
+wheel is sampled from the soil map once per control step (a wheel moves millimetres in one
+step; maps blend over decimetres).
 
 Slip follows the convention of ``slipenv.terramechanics.contact``; the slip states relax over
-a length sigma = the soil's shear deformation modulus K (Janosi), floored at
-``min_relaxation_m``.
+the contact's own length (`slip_dynamics.contact_relaxation_length_m`): for a wheel the front
+arc r acos(1 - z/r) at its Bekker sinkage z under the static load share (Wong Ch. 5; Pacejka
+§7.2.1, sigma ~ a), floored at ``min_relaxation_m``. The road wheels of the old per-wheel track
+law get their own arc too: with half the track length (0.24 m) each road wheel's separate state
+became a soft spring and the lateral damper carried 3.2 % of the force on Yamauchi's circle
+(0.8 % with the arc); the track's memory along its length belongs to the track model.
+
+Motion resistance (compaction + rolling) is rate-independent: an elasto-plastic Coulomb element
+per wheel (`slip_dynamics.rut_resistance_n`): full R against the travel at any speed, and at
+rest whatever holds the wheel, at most R. Driven wheels resist along their heading; castors
+(ideal swivels) along their contact velocity (`slip_dynamics.rut_resistance_vector_n`).
+Optionally (``multi_pass``) a wheel running in the rut of the wheel ahead compacts only the
+soil below that rut (`bekker.multi_pass_compaction_n`).
 """
 
 from __future__ import annotations
@@ -23,13 +35,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from slipenv.pybullet_quiet import import_pybullet
+from slipenv.terramechanics.bekker import rut_following_compaction_n
 from slipenv.terramechanics.models import ForceModel, wheel_kernel
 from slipenv.terramechanics.slip_dynamics import (
+    contact_relaxation_length_m,
     critical_damping_ns_per_m,
     lateral_soil_damping_n,
     longitudinal_soil_damping_n,
     relax_slip,
-    resistance_along_travel_n,
+    rut_resistance_n,
+    rut_resistance_vector_n,
 )
 from slipenv.terramechanics.soil import SoilParams
 from slipenv.terramechanics.soil_map import SoilMap, UniformSoil
@@ -47,7 +62,12 @@ class WheelContactState:
     """Per-wheel quantities of the last substep (ground truth for ``info``).
 
     Arrays of shape (n_wheels,): slip ratio, tan of slip angle, normal load [N], longitudinal
-    force (traction, before resistance) and lateral force [N], motion resistance [N], contact.
+    force (traction, before resistance) and lateral force [N], motion resistance [N], contact,
+    and ``damper_n`` [N]: the numerical dampers' share of the force applied at the wheel, |soil
+    longitudinal damper| + |soil lateral damper| + |pre-sliding damper of the resistance
+    element|. ``fx_n`` and ``fy_n`` are the force law's values without the soil dampers;
+    ``resistance_n`` is the applied resistance, whose damper part is zero once the wheel
+    slides (moves more than ``resistance_stick_m``).
     """
 
     slip: np.ndarray
@@ -57,6 +77,7 @@ class WheelContactState:
     fy_n: np.ndarray
     resistance_n: np.ndarray
     in_contact: np.ndarray
+    damper_n: np.ndarray
 
 
 class WheelSoilInjector:
@@ -80,9 +101,12 @@ class WheelSoilInjector:
         Physics substep [s].
     min_relaxation_m : float
         Lower bound of the slip relaxation length σ [m].
-    resistance_speed_mps : float
-        Below this speed the motion resistance ramps linearly to zero [m/s] (resistance opposes
-        motion and vanishes at standstill: it is not static friction).
+    resistance_stick_m : float
+        Pre-sliding displacement x_0 [m] of the motion-resistance element
+        (`slip_dynamics.rut_resistance_n`): the resistance reaches its full, rate-independent
+        value R after this much travel, and a wheel held by less than R moves at most this far.
+        A numerical regulariser of Coulomb's law (Dupont et al. 2002), kept well below the
+        contact length.
     low_speed_mps : float
         Below this speed the longitudinal soil damper fades in [m/s] (Pacejka §7.2: the
         relaxation model alone is an undamped spring at standstill, and its speed-dependent
@@ -93,11 +117,16 @@ class WheelSoilInjector:
         Sideways it acts at every speed, on the rate of the lateral shear deformation, so steady
         side slip and the force law are unchanged: undamped, a tracked vehicle turning at
         crawling speed rocks and slides at several Hz. Lengthwise it acts only below
-        ``low_speed_mps``, on rω - v.
+        ``low_speed_mps``, on rω - v. The pre-sliding damper of the resistance element uses the
+        same ratio.
     damping_speed_mps : float
         Speed scale of the sideways damper [m/s]: weighted 1 / (1 + (V / this)⁴), about 1 at
         the tracked vehicle's 5 cm/s and about 0.01 at 0.6 m/s, where the relaxation leak
         V/σ already damps the spring.
+    multi_pass : bool
+        If True, a wheel running in the rut of the wheel ahead of it (same side, its contact
+        within half a width of that wheel's line) meets only the compaction of the soil below
+        that rut (`bekker.multi_pass_compaction_n`). Default False.
     """
 
     def __init__(
@@ -110,13 +139,14 @@ class WheelSoilInjector:
         soil_map: SoilMap,
         dt_s: float,
         min_relaxation_m: float = 0.01,
-        resistance_speed_mps: float = 0.02,
+        resistance_stick_m: float = 1e-3,
         low_speed_mps: float = 0.02,
         damping_ratio: float = 0.5,
         damping_speed_mps: float = 0.2,
+        multi_pass: bool = False,
     ) -> None:
         for key, value in (("dt_s", dt_s), ("min_relaxation_m", min_relaxation_m),
-                           ("resistance_speed_mps", resistance_speed_mps),
+                           ("resistance_stick_m", resistance_stick_m),
                            ("low_speed_mps", low_speed_mps),
                            ("damping_speed_mps", damping_speed_mps)):
             if not (math.isfinite(value) and value > 0.0):
@@ -130,7 +160,7 @@ class WheelSoilInjector:
         self.soil_map = soil_map
         self.dt_s = dt_s
         self.min_relaxation_m = min_relaxation_m
-        self.resistance_speed_mps = resistance_speed_mps
+        self.resistance_stick_m = resistance_stick_m
         self.low_speed_mps = low_speed_mps
         self.damping_ratio = float(damping_ratio)
         self.damping_speed_mps = damping_speed_mps
@@ -145,6 +175,10 @@ class WheelSoilInjector:
         self.radius = [w.radius_m for w in spec.wheels]
         self.soil_radius = [w.soil_rolling_radius_m for w in spec.wheels]
         self.fixed_radius = [w.rolling_radius_m for w in spec.wheels]
+        self.width = [w.width_m for w in spec.wheels]
+        self.multi_pass = bool(multi_pass)
+        self._f_r = float(getattr(force_model, "rolling_resistance_coeff", 0.0))
+        self.leaders = _rut_leaders(spec) if self.multi_pass else [(-1, -1)] * self.n
         self.reset()
 
     def reset(self) -> None:
@@ -156,6 +190,10 @@ class WheelSoilInjector:
         self.fx = [0.0] * n
         self.fy = [0.0] * n
         self.res = [0.0] * n
+        self.damper = [0.0] * n
+        self.rut = [0.0] * n  # pre-sliding state of the resistance element (driven wheels)
+        self.rut_vec: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * n  # castors
+        self.resistance_force_n: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * n
         self.chassis_contact = False
         self.sample_soil(force=True)
 
@@ -175,8 +213,8 @@ class WheelSoilInjector:
             params = self.soil_map.params_at(xs, ys)
             rows = [_params_row(params, k) for k in range(self.n)]
         self._soil_rows = rows
-        self._h = [self.dt_s / max(float(sp.shear_modulus_m), self.min_relaxation_m)
-                   for sp in rows]
+        self._sigma = [self._relaxation_m(sp, k) for k, sp in enumerate(rows)]
+        self._h = [self.dt_s / sigma for sigma in self._sigma]
         self._r_eff = [self._rolling_radius_m(sp, k) for k, sp in enumerate(rows)]
         kernels = {}
         for sp in rows:
@@ -184,10 +222,36 @@ class WheelSoilInjector:
                 kernels[id(sp)] = wheel_kernel(self.force_model, sp)
         self._kernels = [kernels[id(sp)] for sp in rows]
         self._damping = [self._soil_damping(k) for k in range(self.n)]
+        self._rut_damping = [self._resistance_damping(k) for k in range(self.n)]
 
     def soil_at_wheel(self, k: int) -> SoilParams:
         """The soil (floats) under wheel ``k`` at the last `sample_soil` (read-only)."""
         return self._soil_rows[k]
+
+    def relaxation_length_m(self, k: int) -> float:
+        """Slip relaxation length σ [m] of wheel ``k`` on its current soil (read-only)."""
+        return float(self._sigma[k])
+
+    def static_sinkage_m(self, k: int) -> float:
+        """Bekker sinkage z [m] of wheel ``k`` under its static load share (Wong Ch. 5)."""
+        sp = self._soil_rows[k]
+        load = self.mass_share_kg * _G
+        return _wheel_sinkage_m(load, self.width[k], 2.0 * self.radius[k], _bekker_row(sp))
+
+    def _relaxation_m(self, soil_params: SoilParams, k: int) -> float:
+        """σ of wheel ``k``: the front contact arc at its static sinkage (road wheels too)."""
+        load = self.mass_share_kg * _G
+        z = _wheel_sinkage_m(load, self.width[k], 2.0 * self.radius[k], _bekker_row(soil_params))
+        return contact_relaxation_length_m(self.radius[k], z, self.min_relaxation_m)
+
+    def _resistance_damping(self, k: int) -> float:
+        """Pre-sliding damper c [N s/m] of wheel ``k``'s resistance element: ``damping_ratio``
+        of critical for the spring R/x_0 at the static load share (capped as the soil dampers)."""
+        load = self.mass_share_kg * _G
+        res = self._kernels[k](0.0, 0.0, load)[2]
+        cap = 0.5 * self.mass_share_kg / self.dt_s
+        return critical_damping_ns_per_m(res, self.resistance_stick_m, self.mass_share_kg,
+                                         self.damping_ratio, cap)
 
     def rolling_radius_m(self, k: int) -> float:
         """Effective rolling radius r_eff [m] of wheel ``k`` on its current soil (read-only)."""
@@ -242,13 +306,17 @@ class WheelSoilInjector:
         h, r_eff, driven, spin_index, wheel_links = (self._h, self._r_eff, self.driven,
                                                      self.spin_index, self.links)
         fade_speed, low_speed = self.damping_speed_mps, self.low_speed_mps
-        ramp_speed = self.resistance_speed_mps
-        fx_out, fy_out, res_out = [0.0] * n, [0.0] * n, [0.0] * n
+        stick, dt, rut, rut_vec, rut_damping = (self.resistance_stick_m, self.dt_s, self.rut,
+                                                self.rut_vec, self._rut_damping)
+        fx_out, fy_out, res_out, damp_out = [0.0] * n, [0.0] * n, [0.0] * n, [0.0] * n
+        force_out = self.resistance_force_n
+        multi_pass = self.multi_pass
         apply_force, world = p.applyExternalForce, p.WORLD_FRAME
         for k in range(n):
             w = load[k]
             if w <= 0.0:
-                slip[k] = tanb[k] = 0.0
+                slip[k] = tanb[k] = rut[k] = 0.0
+                rut_vec[k] = force_out[k] = (0.0, 0.0, 0.0)
                 continue
             ls = links[k]
             cx, cy, cz, ex, ey, ez, lx, ly, lz, v_long, v_lat = _contact_kinematics(patch[k], w, ls)
@@ -260,20 +328,59 @@ class WheelSoilInjector:
                 f_long, f_lat, res = kernels[k](s, t, w)
                 fx_out[k], fy_out[k] = f_long, f_lat
                 c_long, d_lat = damping[k]
-                f_lat += lateral_soil_damping_n(t - t_old, v_ref, d_lat, fade_speed)
-                f_long += longitudinal_soil_damping_n(r_omega, v_long, v_ref, c_long, low_speed)
+                d_y = lateral_soil_damping_n(t - t_old, v_ref, d_lat, fade_speed)
+                d_x = longitudinal_soil_damping_n(r_omega, v_long, v_ref, c_long, low_speed)
+                f_lat += d_y
+                f_long += d_x
                 # Shear (traction, side force) acts at the contact patch: the motor feels r F.
                 apply_force(bid, wheel_links[k],
                             (f_long * ex + f_lat * lx, f_long * ey + f_lat * ly,
                              f_long * ez + f_lat * lz), (cx, cy, cz), world, physicsClientId=cid)
+                if multi_pass:
+                    res = self._multi_pass(k, res, w, v_long, load)
+                # Resistance along the heading, rate-independent (Coulomb-like).
+                r_k, u_k = rut_resistance_n(res, rut[k], v_long * dt, v_long, stick,
+                                            rut_damping[k])
+                rut[k] = u_k
+                damp_out[k] = abs(d_x) + abs(d_y) + abs(r_k - res * u_k)
+                res_out[k] = abs(r_k)
+                force = (-r_k * ex, -r_k * ey, -r_k * ez)
             else:
                 res = kernels[k](0.0, 0.0, w)[2]
-            r_k = resistance_along_travel_n(res, v_long, ramp_speed)
-            res_out[k] = abs(r_k)
-            if r_k != 0.0:
-                apply_force(bid, wheel_links[k], (-r_k * ex, -r_k * ey, -r_k * ez), ls[0], world,
-                            physicsClientId=cid)
-        self.load, self.fx, self.fy, self.res = load, fx_out, fy_out, res_out
+                if multi_pass:
+                    res = self._multi_pass(k, res, w, v_long, load)
+                # A swivel castor: resistance along its contact velocity (in the contact plane).
+                vx, vy, vz = ls[6]
+                v_side = vx * lx + vy * ly + vz * lz
+                (rx, ry, rz), u = rut_resistance_vector_n(
+                    res, rut_vec[k], (v_long * ex + v_side * lx, v_long * ey + v_side * ly,
+                                      v_long * ez + v_side * lz), dt, stick, rut_damping[k])
+                rut_vec[k] = u
+                res_out[k] = math.sqrt(rx * rx + ry * ry + rz * rz)
+                dx, dy, dz = rx - res * u[0], ry - res * u[1], rz - res * u[2]
+                damp_out[k] = math.sqrt(dx * dx + dy * dy + dz * dz)
+                force = (-rx, -ry, -rz)
+            force_out[k] = force
+            if res_out[k] != 0.0:
+                apply_force(bid, wheel_links[k], force, ls[0], world, physicsClientId=cid)
+        self.load, self.fx, self.fy, self.res, self.damper = (load, fx_out, fy_out, res_out,
+                                                              damp_out)
+
+    def _multi_pass(self, k: int, res: float, load_n: float, v_long: float,
+                    loads: list[float]) -> float:
+        """Resistance of wheel ``k`` when it runs in the rut of the wheel ahead (`multi_pass`).
+
+        The leader is the wheel ahead in the direction of travel (sign of v_long); its rut, cut
+        on the soil now under wheel ``k``, was compacted by the leader's load, so the follower's
+        compaction is `bekker.rut_following_compaction_n` of the two compactions (the
+        rolling term f_r W is kept whole)."""
+        leader = self.leaders[k][0 if v_long >= 0.0 else 1]
+        if leader < 0 or loads[leader] <= 0.0:
+            return res
+        f_r, w_lead = self._f_r, loads[leader]
+        lead = self._kernels[k](0.0, 0.0, w_lead)[2] - f_r * w_lead
+        rolling = f_r * load_n
+        return rolling + rut_following_compaction_n(res - rolling, lead)
 
     def _patches(self, contacts: tuple) -> tuple[list[float], list[list[float] | None]]:
         """Per wheel: the normal load W [N] and the load-weighted sums of its contact points and
@@ -310,7 +417,7 @@ class WheelSoilInjector:
         return WheelContactState(
             slip=np.array(self.s), tan_beta=np.array(self.b), load_n=load,
             fx_n=np.array(self.fx), fy_n=np.array(self.fy), resistance_n=np.array(self.res),
-            in_contact=load > 0.0,
+            in_contact=load > 0.0, damper_n=np.array(self.damper),
         )
 
     def joint_torques(self) -> list[float]:
@@ -369,3 +476,39 @@ def _params_row(params: SoilParams, k: int) -> SoilParams:
     return type(params)(*(
         (v[k] if isinstance(v, np.ndarray) and v.ndim else v) for v in params
     ))
+
+
+def _bekker_row(params: SoilParams) -> tuple[float, float, float, float]:
+    """(k_c, k_phi, n, deformable) of one soil, in floats."""
+    return (float(params.k_c), float(params.k_phi), float(params.n_exp),
+            float(params.deformable))
+
+
+def _wheel_sinkage_m(load_n: float, width_m: float, diameter_m: float,
+                     bekker: tuple[float, float, float, float]) -> float:
+    """Bekker static sinkage of a rigid wheel (`bekker.wheel_sinkage_m`, Wong Ch. 5), in floats,
+    times the soil's ``deformable`` (0 on rigid ground)."""
+    k_c, k_phi, n, deformable = bekker
+    if deformable <= 0.0 or load_n <= 0.0:
+        return 0.0
+    base = 3.0 * load_n / ((3.0 - n) * (k_c + width_m * k_phi) * math.sqrt(diameter_m))
+    return deformable * base ** (2.0 / (2.0 * n + 1.0))
+
+
+def _rut_leaders(spec: VehicleSpec) -> list[tuple[int, int]]:
+    """Per wheel: (index of the wheel ahead in its rut when driving forward, when reversing),
+    -1 for none. A wheel follows another when its centre line lies within half of the other's
+    width of it (chassis frame); the nearest such wheel ahead (behind) leads. None for tracks
+    (their road wheels already share one rut: `ContactGeometry.rut_share`)."""
+    n = len(spec.wheels)
+    if spec.track_length_m is not None:
+        return [(-1, -1)] * n
+    out = []
+    for k, wk in enumerate(spec.wheels):
+        xk, yk = wk.position_m[0], wk.position_m[1]
+        ahead = [(wj.position_m[0] - xk, j) for j, wj in enumerate(spec.wheels)
+                 if j != k and abs(wj.position_m[1] - yk) < 0.5 * wj.width_m]
+        front = min(((dx, j) for dx, j in ahead if dx > 0.0), default=(0.0, -1))[1]
+        back = max(((dx, j) for dx, j in ahead if dx < 0.0), default=(0.0, -1))[1]
+        out.append((front, back))
+    return out

@@ -37,6 +37,7 @@ from slipenv.terramechanics.models import (
 )
 from slipenv.terramechanics.presets import (
     CONCRETE,
+    DRY_SAND,
     FIELD_LOAM,
     LOOSE_SAND,
     LUNAR_SIMULANT,
@@ -70,6 +71,7 @@ __all__ = [
     "LUNAR_SIMULANT",
     "PARAM_FIELDS",
     "SOILS",
+    "DRY_SAND",
     "TOYOURA_SAND",
     "Circle",
     "ContactGeometry",

@@ -12,7 +12,18 @@ of pressing a rut of depth z per unit distance travelled, the compaction resista
 
 (standard Bekker theory; Wong, Theory of Ground Vehicles, Ch. 2 and 5). Both are power laws in
 the load, R_c = gamma W^e, which is how the force models evaluate them per physics substep.
-On non-deformable ground there is no rut and R_c = 0. All functions broadcast.
+On non-deformable ground there is no rut and R_c = 0. All functions broadcast, except
+`rut_following_compaction_n` (plain floats, called per substep).
+
+Multi-pass (`rut_following_compaction_n`). Soil unloaded and reloaded follows a steep, nearly
+elastic line up to the maximum pressure it has already carried, and the virgin
+pressure-sinkage curve only beyond it (Wong, Theory of Ground Vehicles, 4th ed., §2.4,
+repetitive loading; Wong, Terramechanics and Off-Road Vehicle Engineering, 2nd ed., Ch. 2).
+A wheel running in the rut of a leading wheel therefore does the compaction work only below
+that rut: R_c = b k_eq (z_f^{n+1} - z_rut^{n+1})/(n+1), zero when it sinks no deeper. This
+neglects the (small) reloading work and the extra sinkage slip adds on later passes, which
+Holm measured on repeated tyre passes (Holm, J. Terramechanics 6(3), 1969): it is an upper
+bound on the multi-pass reduction, and therefore opt-in.
 """
 
 from __future__ import annotations
@@ -26,6 +37,7 @@ __all__ = [
     "compaction_resistance_n",
     "wheel_compaction_law",
     "track_compaction_law",
+    "rut_following_compaction_n",
 ]
 
 
@@ -113,3 +125,21 @@ def track_compaction_law(width_m: float, length_m: float, k_c: ArrayLike, k_phi:
     exponent = (n + 1.0) / n
     gamma = np.asarray(deformable) * k_eq_b / (n + 1.0) * (1.0 / (length_m * k_eq_b)) ** exponent
     return gamma, exponent
+
+
+def rut_following_compaction_n(compaction_n: float, rut_compaction_n: float) -> float:
+    """Compaction resistance [N] of a wheel in the rut of a leading wheel (module docstring).
+
+    With the follower's geometry for both, R_c(z) = b k_eq z^{n+1}/(n+1) is monotone in the
+    sinkage, so the work below the rut is R_c(z_f) - R_c(z_rut): the follower's own compaction
+    minus that of the rut's depth, floored at 0 (a lighter follower sinks no deeper).
+
+    Parameters
+    ----------
+    compaction_n : float
+        R_c of the follower on virgin soil [N] (its load, its geometry).
+    rut_compaction_n : float
+        R_c at the rut's depth, i.e. of the same geometry under the leader's load [N].
+    """
+    extra = compaction_n - rut_compaction_n
+    return extra if extra > 0.0 else 0.0

@@ -88,15 +88,21 @@ class _PatchModel(ABC):
     `JanosiForceModel`.
     """
 
-    def __init__(self, geometry: ContactGeometry, rolling_resistance_coeff: float = 0.01) -> None:
+    def __init__(self, geometry: ContactGeometry, rolling_resistance_coeff: float = 0.01,
+                 lateral_stiffness_ratio: float = 1.0) -> None:
         if not isinstance(geometry, ContactGeometry):
             raise TypeError(f"geometry must be a ContactGeometry, got {type(geometry).__name__}")
         coeff = float(rolling_resistance_coeff)
         if not (math.isfinite(coeff) and coeff >= 0.0):
             raise ValueError(f"rolling_resistance_coeff={rolling_resistance_coeff!r} must be "
                              "finite and >= 0")
+        ratio = float(lateral_stiffness_ratio)
+        if not (math.isfinite(ratio) and ratio > 0.0):
+            raise ValueError(f"lateral_stiffness_ratio={lateral_stiffness_ratio!r} must be "
+                             "finite and > 0")
         self.geometry = geometry
         self.rolling_resistance_coeff = coeff
+        self.lateral_stiffness_ratio = ratio
 
     @abstractmethod
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
@@ -170,8 +176,10 @@ class _PatchModel(ABC):
         return self.scalar_kernel(soil)(slip, tan_beta, load_n)
 
     def __repr__(self) -> str:
+        aniso = (f", lateral_stiffness_ratio={self.lateral_stiffness_ratio!r}"
+                 if self.lateral_stiffness_ratio != 1.0 else "")
         return (f"{type(self).__name__}({self.geometry!r}, "
-                f"rolling_resistance_coeff={self.rolling_resistance_coeff!r})")
+                f"rolling_resistance_coeff={self.rolling_resistance_coeff!r}{aniso})")
 
 
 class JanosiForceModel(_PatchModel):
@@ -197,10 +205,19 @@ class JanosiForceModel(_PatchModel):
         f_r [-] of the rolling resistance f_r W of the tyre itself (hysteresis), present on
         every surface including rigid ground; default 0.01, a tyre on concrete (Wong, Ch. 1:
         0.01-0.015). `resistance_n` adds Bekker compaction on deformable soil.
+    lateral_stiffness_ratio : float
+        kappa [-], > 0: the soil's lateral small-slip stiffness over its longitudinal one
+        (`janosi.janosi_forces`, lateral anisotropy; Reina measured C_y/C_x = 3.6 on loose
+        soil, Reina Table 3). Default 1, isotropic: no slipenv soil has a measured value.
     """
 
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
         ac, tan_phi, ratio = self._patch_constants(soil)
+        kappa = self.lateral_stiffness_ratio
+        if kappa != 1.0:
+            def anisotropic(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
+                return janosi_forces(slip, tan_beta, load_n, ac, tan_phi, ratio, kappa)
+            return anisotropic
 
         def forces(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
             return janosi_forces(slip, tan_beta, load_n, ac, tan_phi, ratio)
@@ -217,11 +234,18 @@ class LinearSlipForceModel(_PatchModel):
 
         (fx, fy) = (s, -tan_beta) F_max min(sigma/(2B), 1)/sigma.
 
-    No contact (W <= 0), no force. Constructor arguments as in `JanosiForceModel`.
+    No contact (W <= 0), no force. Constructor arguments as in `JanosiForceModel`
+    (``lateral_stiffness_ratio`` kappa scales tan_beta the same way).
     """
 
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
         ac, tan_phi, ratio = self._patch_constants(soil)
+
+        kappa = self.lateral_stiffness_ratio
+        if kappa != 1.0:  # lateral anisotropy as in `JanosiForceModel`: tan_beta -> kappa tan_beta
+            def anisotropic(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
+                return linear_slip_forces(slip, kappa * tan_beta, load_n, ac, tan_phi, ratio)
+            return anisotropic
 
         def forces(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
             return linear_slip_forces(slip, tan_beta, load_n, ac, tan_phi, ratio)

@@ -21,8 +21,8 @@ from types import MappingProxyType
 
 from slipenv.terramechanics.soil import Soil
 
-__all__ = ["LUNAR_SIMULANT", "LOOSE_SAND", "FIELD_LOAM", "TOYOURA_SAND", "CONCRETE", "SOILS",
-           "soil_by_name"]
+__all__ = ["LUNAR_SIMULANT", "LOOSE_SAND", "FIELD_LOAM", "TOYOURA_SAND", "DRY_SAND", "CONCRETE",
+           "SOILS", "soil_by_name"]
 
 _REINA_WHEEL_LOAD_N = 6.6 * 9.80665  # [N] Reina Sec. 3.2: W = 6.6 kg on the test bed
 
@@ -103,6 +103,31 @@ TOYOURA_SAND = Soil(
     deformable=True,
 )
 
+DRY_SAND = Soil(
+    name="dry_sand",
+    # A dry, loose silica sand for the Yamauchi experiments (their Toyoura sand was poured
+    # loose into a 0.2 m box; no bevameter set for it was found). Every Bekker and strength
+    # value is the Land Locomotion Laboratory's dry sand as tabulated by Wong (Theory of Ground
+    # Vehicles, Ch. 2, table of terrain values: n = 1.1, k_c = 0.99 kN/m^(n+1), k_phi =
+    # 1528.43 kN/m^(n+2), c = 1.04 kPa, phi = 28 deg). The 30 kg Patako sinks ~3 mm on it
+    # (2.9 kPa ground pressure), against 0.06 mm on LETE sand.
+    cohesion_pa=1.04e3,                     # Wong, dry sand (LLL)
+    friction_angle_rad=math.radians(28.0),  # Wong, dry sand (LLL)
+    shear_modulus_m=0.025,                  # Wong Ch. 2 (after Bekker): K about 2.5 cm for
+    #                                         loose sand (1 cm at maximum compaction)
+    k_c=0.99e3,                             # Wong, dry sand (LLL)
+    k_phi=1528.43e3,                        # Wong, dry sand (LLL)
+    n_exp=1.1,                              # Wong, dry sand (LLL)
+    mu=0.56,                                # assumed: as loose_sand (Reina Table 3 scaled)
+    c_x_n=35.0,                             # assumed: as loose_sand
+    c_y_n=127.0,                            # assumed: as loose_sand
+    a_x=0.02,                               # assumed: Reina Table 3
+    a_y=0.04,                               # assumed: Reina Table 3
+    reference_load_n=_REINA_WHEEL_LOAD_N,
+    rolling_radius_scale=1.0,               # assumed: rigid wheel
+    deformable=True,
+)
+
 CONCRETE = Soil(
     name="concrete",
     # Rigid ground: traction is limited by rubber-on-concrete friction, so (c, phi) describe the
@@ -125,7 +150,7 @@ CONCRETE = Soil(
 )
 
 SOILS: Mapping[str, Soil] = MappingProxyType(
-    {s.name: s for s in (LUNAR_SIMULANT, LOOSE_SAND, FIELD_LOAM, TOYOURA_SAND, CONCRETE)}
+    {s.name: s for s in (LUNAR_SIMULANT, LOOSE_SAND, FIELD_LOAM, TOYOURA_SAND, DRY_SAND, CONCRETE)}
 )
 """All presets by name (read-only)."""
 

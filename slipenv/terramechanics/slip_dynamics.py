@@ -1,4 +1,4 @@
-"""Slip as a state: the relaxation-length step, the soil dampers and the resistance ramp.
+"""Slip as a state: relaxation length and step, soil dampers, and the rut (Coulomb) resistance.
 
 Plain float functions the simulation calls per wheel and per physics substep (convention of
 `contact`: s > 0 drives, tan_beta = v_lat/|v_long|, forces in the wheel's heading frame).
@@ -24,6 +24,26 @@ the relaxation state is an undamped spring of stiffness C/sigma [N/m] (C = dF/ds
 `critical_damping_ns_per_m` sizes its damper, `lateral_soil_damping_n` and
 `longitudinal_soil_damping_n` apply it. Both vanish in steady slip, so the force laws stay
 exact there.
+
+Relaxation length (`contact_relaxation_length_m`). In the brush model the relaxation length is
+about the half length a of the contact patch (Pacejka §7.2.1, rigid carcass: sigma = a); for a
+rigid wheel in soil the shear builds up along the front arc from the entry angle
+theta_1 = acos(1 - z/r) to the bottom (Wong, Theory of Ground Vehicles, 4th ed., Ch. 5, the
+shear displacement j(theta) of a rigid wheel), so sigma = r theta_1. The same follows from the
+standstill stiffness: a patch of shear length L held still has stiffness F_max/K, the relaxation
+state C/sigma with C = F_max L/(2K) (Lindgren Eq. 23), equal when sigma = L/2.
+
+Motion resistance (`rut_resistance_n`, `rut_resistance_vector_n`). Compaction resistance is the
+work of cutting a rut per unit distance (Bekker; Wong Ch. 5): it is rate-independent, a wheel
+must cut its rut however slowly it moves, so it acts like Coulomb friction: full magnitude R
+against the motion, and at rest whatever holds the wheel still, bounded by R. It is written as
+a single-state elasto-plastic friction element (Dupont, Hayward, Armstrong and Altpeter,
+"Single state elastoplastic friction models", IEEE TAC 47(5), 2002): the state is the
+pre-sliding (elastic) displacement, bounded by a small stick length x_0; the force is
+R x/x_0 plus a damper, capped at R; in sliding x sits at +-x_0 and the force is exactly R
+against the motion at every speed. A vehicle held by less than R does not drift (the state
+stays inside the band), so a stalled vehicle stalls instead of creeping, and the force never
+exceeds R, so it cannot push a parked vehicle by more than the stick length.
 """
 
 from __future__ import annotations
@@ -31,11 +51,14 @@ from __future__ import annotations
 import math
 
 __all__ = [
+    "contact_relaxation_length_m",
     "critical_damping_ns_per_m",
     "lateral_soil_damping_n",
     "longitudinal_soil_damping_n",
     "relax_slip",
     "resistance_along_travel_n",
+    "rut_resistance_n",
+    "rut_resistance_vector_n",
 ]
 
 
@@ -173,3 +196,113 @@ def resistance_along_travel_n(resistance_n: float, long_speed_mps: float,
     """
     ramp = long_speed_mps / ramp_speed_mps
     return resistance_n * (1.0 if ramp > 1.0 else (-1.0 if ramp < -1.0 else ramp))
+
+
+def contact_relaxation_length_m(radius_m: float, sinkage_m: float, min_length_m: float) -> float:
+    """Relaxation length sigma = r acos(1 - z/r) of a rigid wheel sunk z [m], >= the floor.
+
+    The front contact arc r theta_1, theta_1 = acos(1 - z/r) the entry angle (Wong, Theory of
+    Ground Vehicles, Ch. 5), about half the contact patch: the brush model's sigma = a
+    (Pacejka §7.2.1; module docstring). z is clipped to [0, r].
+
+    Parameters
+    ----------
+    radius_m : float
+        Wheel radius r [m], > 0.
+    sinkage_m : float
+        Sinkage z [m] (Bekker, `bekker.wheel_sinkage_m`).
+    min_length_m : float
+        Floor [m] (on rigid ground z -> 0 and the arc vanishes).
+    """
+    ratio = sinkage_m / radius_m
+    ratio = 0.0 if ratio < 0.0 else (1.0 if ratio > 1.0 else ratio)
+    arc = radius_m * math.acos(1.0 - ratio)
+    return arc if arc > min_length_m else min_length_m
+
+
+def rut_resistance_n(resistance_n: float, state: float, displacement_m: float,
+                     speed_mps: float, stick_m: float,
+                     damping_ns_per_m: float) -> tuple[float, float]:
+    """Rate-independent motion resistance along one axis: an elasto-plastic Coulomb element.
+
+    Dupont et al. 2002 (module docstring) with a linear pre-sliding branch: the state
+    u = x/x_0 in [-1, 1] moves with the displacement, u' = clip(u + dx/x_0, -1, 1); the
+    resistance is r = clip(R u' + c v, -R, R), to be applied against the axis (force -r).
+    Sliding (|u'| = 1 and v of its sign): r = R sign(v) at any speed, the rate-independent
+    compaction resistance. At rest under a push below R the state stays inside the band: the
+    element holds, with |r| <= R, and the body does not creep.
+
+    Parameters
+    ----------
+    resistance_n : float
+        R >= 0 [N] (compaction + rolling, from the force model).
+    state : float
+        u at the start of the step [-].
+    displacement_m : float
+        dx = v dt [m] over the step along the axis.
+    speed_mps : float
+        v [m/s] along the axis (for the damper).
+    stick_m : float
+        x_0 [m], > 0: the pre-sliding displacement at which R is reached.
+    damping_ns_per_m : float
+        c [N s/m] of the pre-sliding damper (`critical_damping_ns_per_m` of k = R/x_0).
+
+    Returns
+    -------
+    resistance_n : float
+        r [N], signed along the axis (apply -r).
+    state : float
+        u' [-].
+    """
+    u = state + displacement_m / stick_m
+    u = 1.0 if u > 1.0 else (-1.0 if u < -1.0 else u)
+    r = resistance_n * u + damping_ns_per_m * speed_mps
+    r = resistance_n if r > resistance_n else (-resistance_n if r < -resistance_n else r)
+    return r, u
+
+
+def rut_resistance_vector_n(resistance_n: float, state: tuple[float, float, float],
+                            velocity_mps: tuple[float, float, float], dt_s: float,
+                            stick_m: float, damping_ns_per_m: float
+                            ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """`rut_resistance_n` in the contact plane: the resistance of an ideal swivel castor.
+
+    A castor swivels to its travel, so its rut runs along its contact velocity, whatever the
+    chassis heading: the state u (a vector, |u| <= 1) follows the displacement v dt/x_0 and is
+    renormalised to the unit disc, the resistance r = R u + c v is capped at |r| <= R. In
+    sliding r = R v/|v|: the drag is along the castor's travel (physics-notes §1, defect 4).
+
+    Parameters
+    ----------
+    resistance_n : float
+        R >= 0 [N].
+    state : tuple of 3 floats
+        u at the start of the step (world frame) [-].
+    velocity_mps : tuple of 3 floats
+        Velocity of the contact point in the contact plane (world frame) [m/s].
+    dt_s : float
+        Step [s].
+    stick_m, damping_ns_per_m : float
+        x_0 [m] and c [N s/m] as in `rut_resistance_n`.
+
+    Returns
+    -------
+    resistance_n : tuple of 3 floats
+        r [N] (apply -r).
+    state : tuple of 3 floats
+        u'.
+    """
+    vx, vy, vz = velocity_mps
+    h = dt_s / stick_m
+    ux, uy, uz = state[0] + h * vx, state[1] + h * vy, state[2] + h * vz
+    norm = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if norm > 1.0:
+        ux, uy, uz = ux / norm, uy / norm, uz / norm
+    rx = resistance_n * ux + damping_ns_per_m * vx
+    ry = resistance_n * uy + damping_ns_per_m * vy
+    rz = resistance_n * uz + damping_ns_per_m * vz
+    norm = math.sqrt(rx * rx + ry * ry + rz * rz)
+    if norm > resistance_n:
+        scale = resistance_n / norm
+        rx, ry, rz = rx * scale, ry * scale, rz * scale
+    return (rx, ry, rz), (ux, uy, uz)

@@ -176,7 +176,7 @@ class VirtualTestBed:
         self._beta = slip_angle_rad
 
     def trial(self, slip_ratio: float, slip_angle_deg: float, speed_mps: float = 0.05,
-              settle_s: float = 2.0, average_s: float = 1.0,
+              settle_s: float = 5.0, average_s: float = 1.0,
               convention: str = "reina") -> Trial:
         """Run one steady trial and average the carriage forces over its last ``average_s``.
 
@@ -189,7 +189,8 @@ class VirtualTestBed:
         speed_mps : float
             Speed of the wheel centre over the ground [m/s], > 0 (Reina's rig: <= 10 cm/s).
         settle_s, average_s : float
-            Time to reach steady state, then time averaged over [s].
+            Time to reach steady state, then time averaged over [s]. At 5 cm/s 5 s is about
+            seven slip relaxation lengths (the contact arc, 3.6 cm on the bed's wheel).
         convention : str
             ``"reina"``: tan(beta) = v_lat/v_x (Reina Eq. 4, the real rig). ``"simulation"``:
             tan(beta) = v_lat/max(r omega, v_x), the slip state slipenv's simulation feeds

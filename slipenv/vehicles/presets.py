@@ -5,6 +5,7 @@ Values the papers leave out are listed in each spec's ``assumed`` field and comm
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 
@@ -52,7 +53,7 @@ def farm_2wd() -> VehicleSpec:
     )
 
 
-def tracked_patako(road_wheels_per_side: int = 5) -> VehicleSpec:
+def tracked_patako(road_wheels_per_side: int = 5, track_model: str = "per_wheel") -> VehicleSpec:
     """Yamauchi's skid-steer tracked vehicle (Table 1): tread 0.41 m, tracks 0.60 × 0.11 m.
 
     Each track is ``road_wheels_per_side`` road wheels that share one sprocket speed (one drive
@@ -66,6 +67,11 @@ def tracked_patako(road_wheels_per_side: int = 5) -> VehicleSpec:
     sprocket and idler, about 2 sqrt(2 r z) = 2 cm for z = 1 mm, which is neglected. The contact
     length sets the skid-steering resistance moment (mu W L/4, Wong Ch. 7): with 0.60 m the
     simulated vehicle could not turn uphill on the 15° slope at all.
+
+    ``track_model`` selects the soil model: ``"per_wheel"`` (default: each road wheel its own
+    Janosi patch) or ``"wong_chiang"`` (one shear field along each track, sinkage, rut and
+    side-wall resistance; ``slipenv.sim.track_soil``), registered as the vehicle
+    ``tracked_patako_wong_chiang``.
     """
     tread, track_length, width = 0.41, 0.60, 0.11
     r = 0.06  # assumed road-wheel / sprocket / idler radius
@@ -94,9 +100,18 @@ def tracked_patako(road_wheels_per_side: int = 5) -> VehicleSpec:
         max_yaw_rate_rad_s=math.radians(45.0),
         counts_per_rad=285.0,
         track_length_m=length,
+        track_model=track_model,
         assumed=("chassis_mass_kg", "road wheel radius", "road_wheels_per_side",
                  "track_length_m (contact between sprocket and idler axles)"),
     )
+
+
+def tracked_patako_wong_chiang() -> VehicleSpec:
+    """:func:`tracked_patako` with the Wong-Chiang track model (issue 16): one Janosi shear
+    field along each track, Bekker sinkage with slip-sinkage, a rut state and side-wall
+    bulldozing (``slipenv.terramechanics.track``, ``slipenv.sim.track_soil``)."""
+    return dataclasses.replace(tracked_patako(track_model="wong_chiang"),
+                               name="tracked_patako_wong_chiang")
 
 
 def rover_4ws() -> VehicleSpec:
@@ -173,6 +188,7 @@ def husky() -> VehicleSpec:
 VEHICLES: dict[str, Callable[[], VehicleSpec]] = {
     "farm_2wd": farm_2wd,
     "tracked_patako": tracked_patako,
+    "tracked_patako_wong_chiang": tracked_patako_wong_chiang,
     "rover_4ws": rover_4ws,
     "husky": husky,
 }

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass, field
 
 VEHICLE_KINDS = ("diff_drive", "skid_steer", "rover4ws")
+TRACK_MODELS = ("per_wheel", "wong_chiang")
 WHEEL_ROLES = ("driven", "caster")
 
 
@@ -182,6 +183,12 @@ class VehicleSpec:
         Static sinkage of the compliant wheel-ground contact under the vehicle's own weight [m].
         Soil is not rigid: the compliance spreads the load over a track's road wheels (a rigid
         contact leaves them statically indeterminate, with two or three carrying everything).
+    track_model : str
+        Soil force model of a tracked vehicle: ``"per_wheel"`` (every road wheel its own
+        contact patch and slip state, ``slipenv.sim.wheel_soil``) or ``"wong_chiang"`` (one
+        shear field along each track, with sinkage, rut and side-wall resistance,
+        ``slipenv.terramechanics.track`` and ``slipenv.sim.track_soil``); needs
+        ``track_length_m`` and a ``skid_steer`` vehicle.
     assumed : tuple[str, ...]
         Fields whose values the source paper leaves out and that are assumed here.
 
@@ -211,6 +218,7 @@ class VehicleSpec:
     urdf_wheel_joints: tuple[str, ...] = ()
     track_length_m: float | None = None
     contact_sinkage_m: float = 0.001
+    track_model: str = "per_wheel"
     assumed: tuple[str, ...] = field(default_factory=tuple)
 
     def __post_init__(self) -> None:
@@ -258,6 +266,13 @@ class VehicleSpec:
             raise ValueError(f"{owner}: channels without wheels: {empty}")
         if self.kind == "rover4ws" and self.wheelbase_m is None:
             raise ValueError(f"{owner}: a rover4ws vehicle needs wheelbase_m")
+        if self.track_model not in TRACK_MODELS:
+            raise ValueError(f"{owner}.track_model must be one of {TRACK_MODELS}, "
+                             f"got {self.track_model!r}")
+        if self.track_model == "wong_chiang" and (self.track_length_m is None
+                                                   or self.kind != "skid_steer"):
+            raise ValueError(f"{owner}.track_model='wong_chiang' needs a skid_steer vehicle "
+                             "with track_length_m")
         if self.urdf is not None and len(self.urdf_wheel_joints) != len(self.wheels):
             raise ValueError(f"{owner}: urdf_wheel_joints must name one joint per wheel")
 

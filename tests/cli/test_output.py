@@ -48,7 +48,7 @@ def test_the_quiet_import_keeps_later_output_and_a_plain_import_would_print(tmp_
 def test_bench_collects_estimator_warnings_and_reports_their_count(monkeypatch, capsys):
     import slipenv.bench as bench
 
-    def noisy(env_id, steps, repeats):
+    def noisy(env_id, steps, repeats, **kwargs):
         logging.getLogger("slipenv.estimators.lindgren.ekf").warning(
             "LindgrenEKF: skipping measurement (%s)", "odo_invalid_soil")
         warnings.warn("gains are marginal", RuntimeWarning, stacklevel=1)

@@ -19,7 +19,8 @@ from slipenv.logs import Log
 from tests.diagnose.test_replay import R, kinematic_log, route
 
 VOCABULARY = ("none", "rolling_radius", "track_width", "torque_slip", "turning_slip",
-              "slope_side_slip", "combined_slip", "soil_patch", "gyro_bias")  # log-format.md
+              "slope_side_slip", "combined_slip", "soil_patch", "soil_map",
+              "gyro_bias")  # log-format.md, and soil_map (issue 14)
 
 
 def test_registry_holds_the_vocabulary_in_its_order():

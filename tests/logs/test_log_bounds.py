@@ -61,12 +61,33 @@ def test_an_impossible_meta_value_names_the_key_and_line(small_log, tmp_path, se
 
 
 def test_values_at_the_edge_of_the_bounds_are_accepted(small_log, tmp_path):
+    small_log.signals["gt_x"] = small_log.signals["gt_x"] + 5e6  # a UTM northing
     write_log(small_log, tmp_path)
-    set_cell(tmp_path, "gt_x", 1, "5e6")  # a UTM northing
     set_cell(tmp_path, "torque_left", 2, "2500.0")
     set_meta(tmp_path, "terrain", "slope_deg", 30.0)
     log = read_log(tmp_path)
-    assert log.signals["gt_x"][0] == 5e6
+    assert log.signals["gt_x"][0] > 5e6 - 1.0
+
+
+@pytest.mark.parametrize(("column", "value", "unit"), [
+    ("gt_x", "1.9e7", "m/s"), ("gt_y", "-1e7", "m/s"), ("enc_right", str(2**52), "rad/s"),
+])
+def test_a_jump_within_the_range_but_faster_than_any_vehicle_names_row_and_column(
+        small_log, tmp_path, column, value, unit):
+    write_log(small_log, tmp_path)
+    set_cell(tmp_path, column, 3, value)
+    with pytest.raises(LogFormatError, match=f"jump .* implausible .*{unit}") as err:
+        read_log(tmp_path)
+    assert err.value.column == column and err.value.row == 3
+    assert "signals.csv" in str(err.value)
+
+
+def test_a_ground_truth_gap_is_not_a_jump(small_log, tmp_path):
+    # NaN cells are skipped: the rate is taken to the previous measured sample
+    write_log(small_log, tmp_path)
+    for row in (2, 3, 4):
+        set_cell(tmp_path, "gt_x", row, "")
+    assert np.isnan(read_log(tmp_path).signals["gt_x"][2])
 
 
 def test_every_bounded_column_has_a_positive_finite_limit():

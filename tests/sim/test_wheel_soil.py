@@ -76,7 +76,7 @@ def test_the_injector_reports_the_soil_and_rolling_radius_under_each_wheel():
         rig.close()
 
 
-@pytest.mark.parametrize("option", ["dt_s", "min_relaxation_m", "resistance_speed_mps",
+@pytest.mark.parametrize("option", ["dt_s", "min_relaxation_m", "resistance_stick_m",
                                     "low_speed_mps", "damping_speed_mps", "damping_ratio"])
 def test_injector_options_out_of_range_raise_naming_the_option(option):
     from slipenv.sim.wheel_soil import WheelSoilInjector

@@ -8,6 +8,7 @@ import pytest
 from slipenv.terramechanics import CONCRETE, LOOSE_SAND
 from slipenv.terramechanics.bekker import (
     compaction_resistance_n,
+    rut_following_compaction_n,
     track_compaction_law,
     track_sinkage_m,
     wheel_compaction_law,
@@ -87,3 +88,19 @@ def test_compaction_resistance_is_zero_on_concrete():
 def test_negative_load_counts_as_no_load():
     assert wheel_sinkage_m(-5.0, 0.1, 0.33, *SAND) == 0.0
     assert track_sinkage_m(-5.0, 0.1, 0.6, *SAND) == 0.0
+
+
+def test_a_wheel_in_the_rut_of_an_equal_wheel_compacts_nothing_and_a_heavier_one_the_rest():
+    """Multi-pass (Wong §2.4 repetitive loading): the follower's work is R_c(z_f) - R_c(z_rut),
+    i.e. the compaction of the soil between the rut's depth and its own sinkage."""
+    k_c, k_phi, n = SAND
+    b, d = 0.25, 0.55
+    z_lead = float(wheel_sinkage_m(1000.0, b, d, k_c, k_phi, n))
+    z_follow = float(wheel_sinkage_m(1400.0, b, d, k_c, k_phi, n))
+    r_lead = float(compaction_resistance_n(z_lead, b, k_c, k_phi, n))
+    r_follow = float(compaction_resistance_n(z_follow, b, k_c, k_phi, n))
+    k_eq = k_c + b * k_phi
+    expected = k_eq * (z_follow ** (n + 1) - z_lead ** (n + 1)) / (n + 1)
+    assert rut_following_compaction_n(r_follow, r_lead) == pytest.approx(expected, rel=1e-12)
+    assert rut_following_compaction_n(r_lead, r_lead) == 0.0
+    assert rut_following_compaction_n(r_lead, r_follow) == 0.0  # lighter: no deeper

@@ -7,6 +7,7 @@ import pytest
 from scipy.integrate import quad
 
 from slipenv.terramechanics.janosi import (
+    janosi_forces,
     janosi_shear_stress_pa,
     max_thrust_n,
     mohr_coulomb_strength_pa,
@@ -100,3 +101,22 @@ def test_patch_thrust_never_exceeds_mohr_coulomb_limit():
     assert np.all(np.abs(f) < f_max)
     assert np.abs(f).max() == pytest.approx(f_max * (1 - 0.05 * (1 - math.exp(-20.0))),
                                             rel=1e-13)
+
+
+def test_lateral_anisotropy_multiplies_the_small_slip_side_stiffness_and_keeps_the_limit():
+    """kappa = 3.6 (Reina's C_y/C_x on loose soil): the small-slip lateral stiffness is kappa
+    times the longitudinal one, the resultant still saturates at A c + W tan phi, and
+    kappa = 1 is the isotropic law exactly."""
+    load, ac, tan_phi, ratio = 100.0, 20.0, 0.6, 6.0
+    f_max = ac + load * tan_phi
+    d = 1e-6
+    c_x = janosi_forces(d, 0.0, load, ac, tan_phi, ratio, 3.6)[0] / d
+    c_y = -janosi_forces(0.0, d, load, ac, tan_phi, ratio, 3.6)[1] / d
+    assert c_x == pytest.approx(f_max * ratio / 2, rel=1e-5)  # Lindgren Eq. 24
+    assert c_y / c_x == pytest.approx(3.6, rel=1e-5)
+    fx, fy = janosi_forces(0.3, -20.0, load, ac, tan_phi, ratio, 3.6)
+    assert math.hypot(fx, fy) < f_max
+    assert fy == pytest.approx(f_max, rel=0.01)  # sliding sideways: the Mohr-Coulomb limit
+    for s, t in ((0.1, 0.2), (-0.4, 0.05), (0.0, -0.3)):
+        assert janosi_forces(s, t, load, ac, tan_phi, ratio, 1.0) == janosi_forces(
+            s, t, load, ac, tan_phi, ratio)

@@ -297,3 +297,21 @@ def test_reina_load_scaling_is_load_times_the_law_at_unit_load_with_c_over_w_ref
                                 p.c_y_n / p.reference_load_n, p.a_x, p.a_y)
         fx, fy, _ = kernel(s, tb, w)
         assert (fx, fy) == (fx1 * w, fy1 * w)
+
+
+@pytest.mark.parametrize("cls", [JanosiForceModel, LinearSlipForceModel])
+def test_lateral_stiffness_ratio_scales_side_stiffness_only_and_defaults_to_isotropic(cls):
+    soil = FIELD_LOAM.params()
+    iso, aniso = cls(WHEEL), cls(WHEEL, lateral_stiffness_ratio=3.6)
+    assert iso.lateral_stiffness_ratio == 1.0
+    d, w = 1e-6, np.array([150.0])
+    fx_i, _ = iso(np.array([d]), np.zeros(1), w, soil)
+    fx_a, _ = aniso(np.array([d]), np.zeros(1), w, soil)
+    _, fy_i = iso(np.zeros(1), np.array([d]), w, soil)
+    _, fy_a = aniso(np.zeros(1), np.array([d]), w, soil)
+    assert fx_a[0] == fx_i[0]
+    assert fy_a[0] / fy_i[0] == pytest.approx(3.6, rel=1e-4)
+    assert "lateral_stiffness_ratio=3.6" in repr(aniso)
+    for bad in (0.0, -1.0, math.nan, math.inf):
+        with pytest.raises(ValueError, match="lateral_stiffness_ratio"):
+            cls(WHEEL, lateral_stiffness_ratio=bad)

@@ -20,7 +20,7 @@ from slipenv.terramechanics.janosi import max_thrust_n
 
 def test_all_presets_are_registered_under_their_names_and_revalidate():
     assert set(SOILS) == {"lunar_simulant", "loose_sand", "field_loam", "toyoura_sand",
-                          "concrete"}
+                          "dry_sand", "concrete"}
     for name, soil in SOILS.items():
         assert soil.name == name
         assert soil_by_name(name) is soil

@@ -11,11 +11,14 @@ import pytest
 
 from slipenv.terramechanics.contact import slip_ratio
 from slipenv.terramechanics.slip_dynamics import (
+    contact_relaxation_length_m,
     critical_damping_ns_per_m,
     lateral_soil_damping_n,
     longitudinal_soil_damping_n,
     relax_slip,
     resistance_along_travel_n,
+    rut_resistance_n,
+    rut_resistance_vector_n,
 )
 
 SIGMA_M = 0.02  # [m] relaxation length (a soil's Janosi K)
@@ -135,6 +138,81 @@ def test_resistance_ramps_linearly_through_zero_and_opposes_travel_beyond():
     assert resistance_along_travel_n(r, -0.01, v_r) == pytest.approx(-2.5, rel=1e-15)
     assert resistance_along_travel_n(r, 3.0, v_r) == r
     assert resistance_along_travel_n(r, -3.0, v_r) == -r
+
+
+def test_relaxation_length_is_the_front_arc_r_acos_1_minus_z_over_r_with_its_floor():
+    r = 0.3
+    assert contact_relaxation_length_m(r, 0.0, 0.01) == 0.01  # rigid ground: the floor
+    assert contact_relaxation_length_m(r, r, 0.01) == pytest.approx(r * math.pi / 2, rel=1e-15)
+    assert contact_relaxation_length_m(r, 2 * r, 0.01) == pytest.approx(r * math.pi / 2)  # clip
+    z = 0.01  # shallow: the arc tends to the chord sqrt(2 r z)
+    assert contact_relaxation_length_m(r, z, 0.0) == pytest.approx(math.sqrt(2 * r * z), rel=0.01)
+    # Brush-model consistency (slip_dynamics docstring): the standstill stiffness C/sigma of a
+    # patch of shear length L equals F_max/K when sigma = L/2 (C = F_max L/(2K), Lindgren Eq. 23).
+    f_max, k_soil, length = 500.0, 0.025, 0.18
+    assert (f_max * length / (2 * k_soil)) / (length / 2) == pytest.approx(f_max / k_soil)
+
+
+def _push(force_n: float, resistance_n: float, mass_kg: float, steps: int,
+          v0: float = 0.0) -> tuple[float, float]:
+    """A mass pushed by a constant force against the resistance element; (x, v) at the end."""
+    x, v, u = 0.0, v0, 0.0
+    stick = 1e-3
+    c = critical_damping_ns_per_m(resistance_n, stick, mass_kg, 0.5, 0.5 * mass_kg / DT_S)
+    for _ in range(steps):
+        r, u = rut_resistance_n(resistance_n, u, v * DT_S, v, stick, c)
+        v += (force_n - r) / mass_kg * DT_S
+        x += v * DT_S
+    return x, v
+
+
+def test_resistance_element_holds_a_push_below_r_without_creeping():
+    """Coulomb at rest: 0.9 R applied from rest moves the mass by about the stick length (the
+    damped spring overshoots a little), then it stays put: no creep between 5 s and 10 s (the
+    old speed ramp crept at v_r F/R = 1.8 cm/s here)."""
+    x5, v5 = _push(0.9 * 300.0, 300.0, 120.0, 1200)
+    x10, v10 = _push(0.9 * 300.0, 300.0, 120.0, 2400)
+    assert 0.0 < x5 < 2e-3
+    assert abs(x10 - x5) < 1e-9 and abs(v10) < 1e-9
+
+
+def test_resistance_element_is_rate_independent_in_sliding():
+    """Pushed by 1.5 R, the mass accelerates at exactly (1.5 R - R)/m at any speed: the
+    resistance is R whether it moves at 1 mm/s or 1 m/s (compaction is rate-independent)."""
+    for v0 in (0.001, 0.01, 1.0):
+        x, v = _push(450.0, 300.0, 120.0, 240, v0=v0)
+        assert v - v0 == pytest.approx(150.0 / 120.0, rel=0.02)
+    r, u = rut_resistance_n(300.0, 1.0, 1e-6, 1e-3, 1e-3, 1e4)
+    assert (r, u) == (300.0, 1.0)
+    r, u = rut_resistance_n(300.0, -1.0, -1e-6, -1e-3, 1e-3, 1e4)
+    assert (r, u) == (-300.0, -1.0)
+
+
+def test_resistance_element_never_exceeds_r_and_never_pushes_along_the_motion_when_sliding():
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        res, u0 = rng.uniform(0, 500), rng.uniform(-1, 1)
+        v = rng.normal(0, 0.5)
+        r, u = rut_resistance_n(res, u0, v * DT_S, v, 1e-3, rng.uniform(0, 1e4))
+        assert abs(r) <= res + 1e-12 and abs(u) <= 1.0
+        if abs(u) == 1.0 and u * v > 0:
+            assert r == pytest.approx(res * u)
+
+
+def test_castor_resistance_points_along_its_velocity_with_magnitude_r():
+    v = (0.3, 0.1, 0.0)
+    u = (0.0, 0.0, 0.0)
+    for _ in range(50):  # 0.2 s: far beyond the 1 mm stick length
+        r, u = rut_resistance_vector_n(300.0, u, v, DT_S, 1e-3, 5e3)
+    assert math.hypot(*r) == pytest.approx(300.0, rel=1e-12)
+    assert math.atan2(r[1], r[0]) == pytest.approx(math.atan2(v[1], v[0]), abs=1e-9)
+    # turning: the drag follows the new direction after a few stick lengths of travel
+    v = (0.0, 0.3, 0.0)
+    for _ in range(10):  # 12.5 mm
+        r, u = rut_resistance_vector_n(300.0, u, v, DT_S, 1e-3, 5e3)
+    assert math.atan2(r[1], r[0]) == pytest.approx(math.pi / 2, abs=1e-3)
+    r, _ = rut_resistance_vector_n(300.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), DT_S, 1e-3, 5e3)
+    assert r == (0.0, 0.0, 0.0)  # at rest, unloaded: no force
 
 
 def test_slip_dynamics_import_no_physics_engine():

@@ -283,6 +283,10 @@ class Effect:
         (``patch_`` for the soil patch's ``k_s_<wheel>_nm`` beside torque slip's).
     optional : dict
         Contract names that may be omitted from a model, with the value that switches them off.
+    fixed : tuple of str
+        Layout fields (a map's grid and cells' regions): chosen by ``start`` (a model-order
+        choice on the data), then held while the other fields are fitted; their standard
+        error is 0.
     """
 
     name: str
@@ -299,6 +303,7 @@ class Effect:
     mechanism: str | None = None
     clash_prefix: str = ""
     optional: dict[str, float] = field(default_factory=dict)
+    fixed: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         names = self.fields()

@@ -1,15 +1,19 @@
-"""``slipenv reproduce lindgren``: both experiments, the printed table, plots, JSON, page."""
+"""``slipenv reproduce lindgren``: both experiments in both blocks (headline and robust), the
+printed table, plots, JSON, page."""
 
 from __future__ import annotations
 
 import dataclasses
 import time
+from dataclasses import dataclass
 from pathlib import Path as FsPath
+from typing import Any
 
-from slipenv.paths import path_by_name
+from slipenv.paths import Path, path_by_name
 
 from ..progress import iterate
 from . import plots, report
+from .calibration import calibrate
 from .docs import write_results_page
 from .filters import run_filter
 from .metrics import circles_metrics, dropout_experiment
@@ -18,21 +22,76 @@ from .recording import record
 from .settings import (
     CIRCLE_RADIUS_M,
     CUT_S,
+    FIELD_NOISE,
     FILTER,
     FULL,
+    HEADLINE,
     LAGS,
     QUICK,
-    SCHEMES,
+    ROBUST,
     SETTLE_M,
     SPEED_MPS,
     STEER_SCHEME,
+    Setting,
 )
+
+
+@dataclass
+class Block:
+    """One block's results: its metrics (the JSON's), the recordings and filter runs the
+    plots need, and its calibration (None without a measured radius)."""
+
+    metrics: dict
+    circles: tuple  # (Recording, {name: FilterRun}, circles metrics, autocorrelation series)
+    dropout: tuple  # (first drive's Recording, its {name: FilterRun})
+    calibration: dict | None
+
+
+def run_block(setting: Setting, circles: Path, straights: Path, seeds: list[int],
+              progress: bool = True) -> Block:
+    """Both experiments in ``setting``'s world, on the circle drive ``seeds[0]`` and one
+    straights drive per seed; with ``setting.measured_radius`` the no-slip schemes get the
+    radius measured on a straight calibration drive (seed ``seeds[0]``) in the same world."""
+    calibration = (calibrate(setting, seeds[0], progress) if setting.measured_radius
+                   else None)
+    rec_a = record(circles, seeds[0], progress, setting, calibration)
+    runs_a = {s: run_filter(rec_a, s, variants=setting.variants)
+              for s in iterate(setting.circle_filters, progress, f"filters (a), {setting.name}")}
+    circ, rho = circles_metrics(rec_a, runs_a)
+    drop, rec_b, runs_b = dropout_experiment(straights, seeds, progress, setting, calibration)
+    final = drop["final_error_m"]
+    metrics = {
+        **{k: {n: v for n, v in circ[k].items() if n not in setting.variants}
+           for k in ("mean_deviation_m", "nis", "autocorr_mean", "autocorr_var",
+                     "autocorr_share_inside", "n_samples")},
+        "dropout_final_error_m": {"no_slip_model": final["scheme3"],
+                                  "slip_model": final["scheme4"], "oracle": final["oracle"]},
+        "circles": circ, "dropout": drop,
+    }
+    return Block(metrics, (rec_a, runs_a, circ, rho), (rec_b, runs_b), calibration)
+
+
+def _plots(block: Block, out: FsPath, suffix: str) -> list[FsPath]:
+    rec_a, runs_a, circ, rho = block.circles
+    rec_b, runs_b = block.dropout
+    saved = [plots.plot_paths(rec_a, runs_a, circ, out / f"paths{suffix}.png"),
+             plots.plot_dropout(rec_b, runs_b, out / f"dropout{suffix}.png", CUT_S)]
+    if not suffix:
+        saved.append(plots.plot_autocorrelation(rho, out / "autocorrelation.png"))
+    return saved
 
 
 def run(quick: bool = False, out_dir: str = "runs/reproduce_lindgren",
         json_path: str | None = None, seed: int = 0, progress: bool = True,
         docs_dir: str | None = None) -> dict:
-    """Run both experiments; print paper vs simulation; save plots, the JSON and the page.
+    """Run both experiments in both blocks; print paper vs simulation; save plots, the JSON
+    and the page.
+
+    The headline block (:data:`~.settings.HEADLINE`) drives the world with the filter's own
+    linear law and gives the filters the uniform-field settings; the robust block
+    (:data:`~.settings.ROBUST`, issue 16 item 7) drives the same paths with the same seeds and
+    beacons in the curved Janosi/Okello world, with the estimator's default soil random walk
+    and a measured radius for the no-slip filter.
 
     Parameters
     ----------
@@ -52,7 +111,8 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_lindgren",
     Returns
     -------
     dict
-        ``{"metrics", "paper", "targets", "config", "run_time_s"}``.
+        ``{"metrics", "paper", "targets", "targets_robust", "config", "run_time_s"}``;
+        ``metrics["robust"]`` holds the robust block's metrics, with the headline's keys.
     """
     start = time.perf_counter()
     cfg = QUICK if quick else FULL
@@ -60,31 +120,29 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_lindgren",
                            loops=cfg.circle_loops)
     straights = path_by_name("lindgren_straights", n_legs=cfg.straight_legs,
                              speed_mps=SPEED_MPS)
-    rec_a = record(circles, seed, progress)
-    runs_a = {s: run_filter(rec_a, s) for s in iterate(SCHEMES, progress, "filters (a)")}
-    circ, rho = circles_metrics(rec_a, runs_a)
     seeds = [seed + i for i in range(cfg.dropout_drives)]
-    drop, rec_b, runs_b = dropout_experiment(straights, seeds, progress)
-    final = drop["final_error_m"]
-    metrics = {
-        **{k: circ[k] for k in ("mean_deviation_m", "nis", "autocorr_mean", "autocorr_var",
-                                "autocorr_share_inside", "n_samples")},
-        "dropout_final_error_m": {"no_slip_model": final["scheme3"],
-                                  "slip_model": final["scheme4"], "oracle": final["oracle"]},
-        "circles": circ, "dropout": drop,
-    }
+    head = run_block(HEADLINE, circles, straights, seeds, progress)
+    robust = run_block(ROBUST, circles, straights, seeds, progress)
+    metrics = {**head.metrics, "robust": robust.metrics}
     out = FsPath(out_dir)
-    saved = [plots.plot_paths(rec_a, runs_a, circ, out / "paths.png"),
-             plots.plot_dropout(rec_b, runs_b, out / "dropout.png", CUT_S),
-             plots.plot_autocorrelation(rho, out / "autocorrelation.png")]
-    result = {"metrics": metrics, "paper": PAPER, "targets": report.targets(metrics),
+    saved = _plots(head, out, "") + _plots(robust, out, "_robust")
+    rec_a = head.circles[0]
+    result: dict[str, Any] = {
+              "metrics": metrics, "paper": PAPER, "targets": report.targets(metrics),
+              "targets_robust": report.targets(robust.metrics),
               "config": {"quick": quick, "seed": seed, "steered_by": f"scheme {STEER_SCHEME}",
                          **dataclasses.asdict(cfg), "speed_mps": SPEED_MPS,
                          "settle_m": SETTLE_M, "lags": LAGS, "cut_s": CUT_S,
                          "filter": FILTER, "k_s_prior": rec_a.params.k_s0,
-                         "nominal_wheel_radius_m": rec_a.geometry.wheel_radius_m},
+                         "nominal_wheel_radius_m": rec_a.geometry.wheel_radius_m,
+                         "robust": {"force_model": ROBUST.force_model,
+                                    "filter": dict(ROBUST.noise),
+                                    "soil_noise": {k: getattr(robust.circles[0].params, k)
+                                                   for k in FIELD_NOISE},
+                                    "calibration": robust.calibration}},
               "run_time_s": time.perf_counter() - start}
-    print(report.format_table(metrics, PAPER, result["targets"], result["run_time_s"]))
+    print(report.format_table(metrics, PAPER, result["targets"], result["run_time_s"],
+                              result["targets_robust"]))
     print("plots: " + ", ".join(str(p) for p in saved))
     if json_path:
         print(f"written: {report.write_json(result, json_path)}")

@@ -5,15 +5,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
 from slipenv.contracts import wrap_angles
-from slipenv.estimators.lindgren import LindgrenEKF, LindgrenNoise
+from slipenv.estimators.lindgren import LindgrenEKF
 
 from .recording import Recording, quiet_estimator
-from .settings import VARIANTS
+from .settings import HEADLINE, Variant
 
 
 @dataclass
@@ -36,18 +37,28 @@ class FilterRun:
 
 
 def run_filter(rec: Recording, name: str, cut_s: float = math.inf,
-               inertial: bool = True) -> FilterRun:
-    """Run one filter (``"scheme1"``..``"scheme4"``, ``"oracle"`` or a
-    :data:`~.settings.VARIANTS` name) over the recorded frames.
+               inertial: bool = True,
+               variants: Mapping[str, Variant] = HEADLINE.variants) -> FilterRun:
+    """Run one filter (``"scheme1"``..``"scheme4"``, ``"oracle"`` or a name of ``variants``,
+    the block's :attr:`~.settings.Setting.variants`) over the recorded frames.
 
     Bearings after ``cut_s`` [s] are removed; ``inertial=False`` removes the gyro,
-    accelerometer and inclinometer readings (laser and odometers only).
+    accelerometer and inclinometer readings (laser and odometers only). The no-slip schemes
+    (2, 3) use the recording's measured radius if it has one.
     """
-    scheme, reset_to_default = VARIANTS.get(name, (name, ()))
-    params = dataclasses.replace(
-        rec.params, **{k: getattr(LindgrenNoise, k) for k in reset_to_default})
+    variant = variants[name] if name in variants else Variant(name)
+    scheme = variant.scheme
+    params = dataclasses.replace(rec.params, **variant.noise)
+    geometry = rec.geometry
+    if (scheme in ("scheme2", "scheme3") and rec.no_slip_radius_m is not None
+            and not variant.nominal_radius):
+        geometry = dataclasses.replace(geometry, wheel_radius_m=rec.no_slip_radius_m)
     oracle = rec.oracle if scheme == "oracle" else None
-    ekf = LindgrenEKF(rec.geometry, scheme=4 if oracle else int(scheme[-1]), params=params,
+    if oracle is not None and variant.secant_k_s:
+        if rec.k_s_secant_nm is None:
+            raise ValueError(f"{name}: the recording has no calibration (secant k_s)")
+        oracle = dataclasses.replace(oracle, k_s=(rec.k_s_secant_nm,) * 2)
+    ekf = LindgrenEKF(geometry, scheme=4 if oracle else int(scheme[-1]), params=params,
                       beacons_xy=rec.beacons_xy, oracle=oracle)
     none = np.zeros(0)
     est, cov = [], []

@@ -24,7 +24,7 @@ from slipenv.paths import Path
 from ..progress import iterate
 from .filters import FilterRun, pose_errors, run_filter, soil_estimate
 from .recording import Recording, record
-from .settings import CUT_S, DROPOUT_FILTERS, LAGS, SETTLE_M, VARIANTS
+from .settings import CUT_S, DROPOUT_FILTERS, HEADLINE, LAGS, SETTLE_M, Setting
 
 
 def circles_metrics(rec: Recording, runs: dict[str, FilterRun]) -> tuple[dict, dict]:
@@ -66,23 +66,84 @@ def circles_metrics(rec: Recording, runs: dict[str, FilterRun]) -> tuple[dict, d
     return out, rho
 
 
-def dropout_experiment(path: Path, seeds: list[int], progress: bool = False) -> tuple:
+TURNING_RPS = 0.05  # [rad/s] yaw rate above which a frame counts as turning
+
+
+def torque_slip(rec: Recording) -> dict:
+    """Median measured torque and true slip of the driven wheels: straight, and in the turns
+    the inner and the outer wheel.
+
+    Driving slip s = 1 - v_w / (ω R_w) (Wong's definition; Lindgren Eq. 25) from the truth:
+    v_w the wheel's forward speed (reference point's forward speed minus yaw rate times the
+    wheel's lateral offset), ω the encoder rate, R_w the true rolling radius. Frames below
+    0.1 m/s wheel speed are left out; a frame turns when |yaw rate| >= ``TURNING_RPS``. On
+    Lindgren's linear law the secant T/s is the same k_s for every wheel and motion; on a
+    curved law it falls as the torque rises, so the outer wheel of a turn slips more than a
+    line fitted on the straights says.
+
+    Returns
+    -------
+    dict
+        ``{"straight" | "turn_inner" | "turn_outer": {"torque_nm", "slip",
+        "k_s_secant_nm"}}``, both sides pooled (NaN where under 10 frames).
+    """
+    g, t = rec.geometry, rec.t_s
+    x, y, yaw = rec.truth.T
+    yaw_rate = np.gradient(np.unwrap(yaw), t)
+    v = np.gradient(x, t) * np.cos(yaw) + np.gradient(y, t) * np.sin(yaw)
+    counts = np.array([f.enc_counts for f in rec.frames], dtype=float)
+    torque = np.array([f.wheel_torque_nm for f in rec.frames], dtype=float)
+    sides = (list(g.left), list(g.right))
+    lateral = ([float(np.mean(g.wheel_xy_m[ix, 1])) for ix in sides]
+               if g.wheel_xy_m is not None else [0.5 * g.track_width_m, -0.5 * g.track_width_m])
+    pooled: dict[str, tuple[list, list]] = {m: ([], []) for m in ("straight", "turn_inner",
+                                                                  "turn_outer")}
+    for ix, offset, radius in zip(sides, lateral, rec.oracle.wheel_radius_m, strict=True):
+        spin = np.gradient(counts[:, ix].mean(axis=1), t) / g.counts_per_rad
+        v_w = v - yaw_rate * offset
+        ok = (v_w > 0.1) & (spin > 0.0)
+        slip = 1.0 - v_w / np.where(ok, spin * radius, 1.0)
+        tq = torque[:, ix].mean(axis=1)
+        turning = np.abs(yaw_rate) >= TURNING_RPS
+        outer = yaw_rate * offset < 0.0  # turning left (ω > 0), the right wheel (y < 0) is outer
+        for motion, sel in (("straight", ok & ~turning), ("turn_inner", ok & turning & ~outer),
+                            ("turn_outer", ok & turning & outer)):
+            pooled[motion][0].extend(tq[sel])
+            pooled[motion][1].extend(slip[sel])
+    out = {}
+    for motion, (tq_, slip_) in pooled.items():
+        many = len(tq_) >= 10
+        T = float(np.median(tq_)) if many else math.nan
+        s_ = float(np.median(slip_)) if many else math.nan
+        out[motion] = {"torque_nm": T, "slip": s_,
+                       "k_s_secant_nm": T / s_ if many and s_ > 0.0 else math.nan}
+    return out
+
+
+def dropout_experiment(path: Path, seeds: list[int], progress: bool = False,
+                       setting: Setting = HEADLINE, calibration: dict | None = None) -> tuple:
     """Fig. 7 on one drive per seed: laser + odometry, bearings removed after ``CUT_S``.
 
     Returns (metrics, the first drive's Recording, its FilterRuns). The metrics average the
-    final errors of schemes 3, 4 and the oracle over the drives and list each one; the
-    :data:`~.settings.VARIANTS`, whose effects are large, run on the first drive only.
+    final errors of schemes 3, 4, the oracle and the block's variants (``setting.variants``)
+    over the drives and list each one. ``setting`` and ``calibration`` go to
+    :func:`~.recording.record`.
     """
-    per_run: dict[str, list] = {k: [] for k in DROPOUT_FILTERS}
-    heading: dict[str, list] = {k: [] for k in DROPOUT_FILTERS}
+    names = DROPOUT_FILTERS + tuple(setting.variants)
+
+    def cut_factor(name: str) -> float:
+        return setting.variants[name].cut_factor if name in setting.variants else 1.0
+
+    per_run: dict[str, list] = {k: [] for k in names}
+    heading: dict[str, list] = {k: [] for k in names}
     first = None
-    for seed in iterate(seeds, progress, "dropout drives"):
-        rec = record(path, seed, progress)
-        names = DROPOUT_FILTERS + (tuple(VARIANTS) if first is None else ())
-        runs = {name: run_filter(rec, name, cut_s=CUT_S, inertial=False) for name in names}
+    for seed in iterate(seeds, progress, f"dropout drives, {setting.name}"):
+        rec = record(path, seed, progress, setting, calibration)
+        runs = {name: run_filter(rec, name, cut_s=CUT_S * cut_factor(name), inertial=False,
+                                 variants=setting.variants) for name in names}
         errors = {name: pose_errors(r, rec.truth) for name, r in runs.items()}
         first = first or (rec, runs, errors)
-        for name in DROPOUT_FILTERS:
+        for name in names:
             per_run[name].append(float(errors[name][0][-1]))
             heading[name].append(float(np.degrees(abs(errors[name][1][-1, 2]))))
     rec, runs, errors = first
@@ -92,6 +153,7 @@ def dropout_experiment(path: Path, seeds: list[int], progress: bool = False) -> 
                "first_drive_final_error_m": {k: float(e[0][-1]) for k, e in errors.items()},
                "first_drive_soil_estimate": {k: soil_estimate(runs[k]) for k in runs
                                              if "4" in k},
+               "first_drive_torque_slip": torque_slip(rec),
                "soil_true": {"R_w_m": list(rec.oracle.wheel_radius_m),
                              "k_s": list(rec.oracle.k_s)},
                "seeds": list(seeds), "duration_s": float(rec.t_s[-1]), "cut_s": CUT_S}

@@ -12,6 +12,7 @@ import contextlib
 import logging
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -25,7 +26,7 @@ from slipenv.paths import Path
 from slipenv.rollout import rollout
 
 from ..progress import step_bar
-from .settings import ENV_ID, FILTER, STEER_SCHEME
+from .settings import ENV_ID, HEADLINE, STEER_SCHEME, Setting
 
 
 @dataclass
@@ -47,10 +48,17 @@ class Recording:
     oracle : OracleSoil
         True R_w and k_s (privileged, for the oracle filter only).
     params : LindgrenNoise
-        The filters' parameters: :data:`~.settings.FILTER` and the k_s prior.
+        The filters' parameters: the block's (:attr:`~.settings.Setting.noise`) and the k_s
+        prior.
     geometry : OdometryGeometry
     beacons_xy : np.ndarray, shape (n_beacons, 2)
         Beacon positions [m].
+    no_slip_radius_m : float or None
+        The effective radius the no-slip schemes (2, 3) are given [m], measured on a straight
+        drive (:mod:`.calibration`); None: the geometry's nominal (concrete) radius.
+    k_s_secant_nm : float or None
+        The secant torque/slip gradient measured on that drive [N m] (for the secant oracle
+        variant); None without a calibration.
     """
 
     path: Path
@@ -62,6 +70,8 @@ class Recording:
     params: LindgrenNoise
     geometry: OdometryGeometry
     beacons_xy: np.ndarray
+    no_slip_radius_m: float | None = None
+    k_s_secant_nm: float | None = None
 
 
 class FrameRecorder:
@@ -103,11 +113,19 @@ def quiet_estimator() -> Iterator[None]:
         log.setLevel(level)
 
 
-def record(path: Path, seed: int, progress: bool = False) -> Recording:
-    """Drive ``path`` once in FarmField-v0 (steered on scheme 1) and record every frame."""
+def record(path: Path, seed: int, progress: bool = False, setting: Setting = HEADLINE,
+           calibration: dict | None = None) -> Recording:
+    """Drive ``path`` once in FarmField-v0 (steered on scheme 1) and record every frame.
+
+    ``setting`` picks the world's force law and the filters' parameters; ``calibration``
+    (:func:`~.calibration.calibrate`) gives the no-slip schemes their measured radius and
+    the secant oracle its k_s (see :class:`Recording`).
+    """
     limit_s = path.duration_s + 20.0
+    world: dict[str, Any] = ({} if setting.force_model is None
+                             else {"force_model": setting.force_model})
     env = gym.make(ENV_ID, path=path, estimator_kwargs={"scheme": STEER_SCHEME},
-                   max_episode_s=limit_s, max_episode_steps=int(limit_s * 20.0) + 1)
+                   max_episode_s=limit_s, max_episode_steps=int(limit_s * 20.0) + 1, **world)
     with contextlib.closing(env), quiet_estimator():  # steering EKF's skips: in its extras
         base = env.unwrapped
         rec = FrameRecorder()
@@ -120,5 +138,7 @@ def record(path: Path, seed: int, progress: bool = False) -> Recording:
             path=path, frames=rec.frames, t_s=np.array([f.t_s for f in rec.frames]),
             truth=np.array(rec.truth), s_true_m=np.array(rec.s_true_m),
             oracle=base.true_soil(),
-            params=LindgrenNoise(k_s0=default_k_s_prior(spec), **FILTER),
-            geometry=odometry_geometry(spec), beacons_xy=base.beacons_xy)
+            params=LindgrenNoise(k_s0=default_k_s_prior(spec), **setting.noise),
+            geometry=odometry_geometry(spec), beacons_xy=base.beacons_xy,
+            no_slip_radius_m=None if calibration is None else calibration["radius_m"],
+            k_s_secant_nm=None if calibration is None else calibration["k_s_secant_nm"])

@@ -1,5 +1,8 @@
 """The paper-vs-simulation table of ``slipenv reproduce lindgren`` and the targets of issue #3.
 
+The table has one column per block: the headline (the world with the filter's own linear law)
+and the robust block of issue 16 item 7.
+
 :func:`table_rows` is the one source of the table; :func:`format_table` prints it,
 :func:`markdown_rows` feeds the results page (:mod:`.docs`).
 """
@@ -31,42 +34,69 @@ def targets(m: dict) -> dict[str, dict]:
             for k, (v, lim) in rows.items()}
 
 
-def table_rows(m: dict, paper: dict) -> list[tuple]:
-    """(quantity, paper, simulation) for Tables 1-3 and Fig. 7; one-element rows are headings.
+# Variants of (b): (variant, the scheme it varies, what it changes)
+DROPOUT_VARIANT_ROWS = (
+    ("scheme3_gated", "scheme3", "with the estimator's χ² bearing gate"),
+    ("scheme3_nominal_radius", "scheme3", "with the nominal (concrete) radius"),
+    ("scheme4_default_soil_noise", "scheme4", "with the estimator's soil random walk"),
+    ("scheme4_field_soil_noise", "scheme4", "with the uniform-field soil random walk"),
+    ("oracle_secant", "oracle", "given the secant k_s of the calibration drive"),
+    ("scheme4_cut_x2", "scheme4", "with the laser cut at twice the time"),
+    ("oracle_cut_x2", "oracle", "with the laser cut at twice the time"),
+)
+_DROPOUT_KEYS = {"scheme3": "no_slip_model", "scheme4": "slip_model", "oracle": "oracle"}
 
-    ``m`` is the experiment's ``metrics``, ``paper`` its ``PAPER`` dict; rows the paper has no
-    number for (the true errors, NEES, the oracle, the variants) have None as paper value.
+
+def table_rows(m: dict, paper: dict) -> list[tuple]:
+    """(quantity, paper, headline, robust) for Tables 1-3 and Fig. 7; one-element rows are
+    headings.
+
+    ``m`` is the experiment's ``metrics`` (the robust block in ``m["robust"]``, if run),
+    ``paper`` its ``PAPER`` dict; rows the paper has no number for (the true errors, NEES, the
+    oracle, the variants) have None as paper value, and a block without a row's variant None
+    as its value.
     """
-    c, d = m["circles"], m["dropout"]
+    blocks = [m, m.get("robust")]
+
+    def each(get) -> list:
+        out = []
+        for b in blocks:
+            try:
+                out.append(None if b is None else get(b))
+            except KeyError:
+                out.append(None)
+        return out
+
+    d = m["dropout"]
     rows: list[tuple] = [("(a) 4 m circles, clockwise arc at constant speed",)]
     for s in ("scheme3", "scheme4"):
         rows.append((f"mean deviation from scheme 1 [m], {s}", paper["mean_deviation_m"][s],
-                     m["mean_deviation_m"][s]))
+                     *each(lambda b, s=s: b["mean_deviation_m"][s])))
     rows.append(("  scheme3 with the estimator's χ² bearing gate", None,
-                 c["mean_deviation_m"]["scheme3_gated"]))
+                 *each(lambda b: b["circles"]["mean_deviation_m"]["scheme3_gated"])))
     for s in ("scheme3", "scheme4", "oracle"):
         rows.append((f"  true mean error [m] / pose NEES, {s}", None,
-                     f"{c['true_error_mean_m'][s]:.3f} / {c['nees_pose'][s]:.2f}"))
+                     *each(lambda b, s=s: f"{b['circles']['true_error_mean_m'][s]:.3f} / "
+                                          f"{b['circles']['nees_pose'][s]:.2f}")))
     for key, label in (("nis", "NIS, Eq. 43"), ("autocorr_mean", "autocorrelation mean"),
                        ("autocorr_var", "autocorrelation variance"),
                        ("autocorr_share_inside", "share inside ±1.96/√K")):
         for s in ("scheme3", "scheme4"):
-            rows.append((f"{label}, {s}", paper[key][s], m[key][s]))
-    band, wh = m["nis"]["band"], m["nis"]["band_wilson_hilferty"]
+            rows.append((f"{label}, {s}", paper[key][s], *each(lambda b, k=key, s=s: b[k][s])))
     rows.append(("NIS 95 % band: exact (Eq. 44)", "1.883-2.120",
-                 f"{band[0]:.3f}-{band[1]:.3f} ({wh[0]:.3f}-{wh[1]:.3f})"))
+                 *each(lambda b: "{:.3f}-{:.3f} ({:.3f}-{:.3f})".format(
+                     *b["nis"]["band"], *b["nis"]["band_wilson_hilferty"]))))
     rows.append(("K, odometric innovations in the window", paper["n_samples"],
-                 m["n_samples"]["scheme4"]))
+                 *each(lambda b: b["n_samples"]["scheme4"])))
     rows.append((f"(b) straights, laser + odometry, laser cut at {d['cut_s']:.0f} s, mean of "
                  f"{len(d['seeds'])} drives",))
     for key in ("no_slip_model", "slip_model", "oracle"):
         rows.append((f"final position error [m], {key}", paper["dropout_final_error_m"][key],
-                     m["dropout_final_error_m"][key]))
-    f1 = d["first_drive_final_error_m"]
-    rows.append((f"  first drive: no_slip_model {f1['scheme3']:.3f} m; with the estimator's "
-                 "χ² bearing gate", None, f1["scheme3_gated"]))
-    rows.append((f"  first drive: slip_model {f1['scheme4']:.3f} m; with the estimator's soil "
-                 "random walk", None, f1["scheme4_default_soil_noise"]))
+                     *each(lambda b, k=key: b["dropout_final_error_m"][k])))
+    for variant, base, what in DROPOUT_VARIANT_ROWS:
+        values = each(lambda b, v=variant: b["dropout"]["final_error_m"][v])
+        if any(v is not None for v in values):
+            rows.append((f"  {_DROPOUT_KEYS[base]} {what}", None, *values))
     return rows
 
 
@@ -81,15 +111,21 @@ def target_lines(tg: dict) -> list[str]:
             for k, t in tg.items()]
 
 
-def format_table(m: dict, paper: dict, tg: dict, run_time_s: float) -> str:
-    """Quantity | paper | simulation for Tables 1-3 and Fig. 7, then the targets of issue #3."""
+def format_table(m: dict, paper: dict, tg: dict, run_time_s: float,
+                 tg_robust: dict | None = None) -> str:
+    """Quantity | paper | headline | robust for Tables 1-3 and Fig. 7, then the targets of
+    issue #3 for each block."""
     rows = table_rows(m, paper)
     width = max(len(r[0]) for r in rows)
-    lines = [f"{'quantity':<{width}}  {'paper':>12}  {'simulation':>20}", "-" * (width + 36)]
-    lines += [r[0] if len(r) == 1 else f"{r[0]:<{width}}  {cell(r[1]):>12}  {cell(r[2]):>20}"
+    lines = [f"{'quantity':<{width}}  {'paper':>12}  {'headline':>22}  {'robust':>22}",
+             "-" * (width + 62)]
+    lines += [r[0] if len(r) == 1 else
+              f"{r[0]:<{width}}  {cell(r[1]):>12}  {cell(r[2]):>22}  {cell(r[3]):>22}"
               for r in rows]
-    lines.append("targets (issue #3):")
-    lines += ["  " + line for line in target_lines(tg)]
+    for name, targets_ in (("headline", tg), ("robust", tg_robust)):
+        if targets_ is not None:
+            lines.append(f"targets (issue #3), {name}:")
+            lines += ["  " + line for line in target_lines(targets_)]
     lines.append(f"run time {run_time_s:.1f} s")
     return "\n".join(lines)
 
@@ -99,5 +135,5 @@ def markdown_rows(m: dict, paper: dict) -> list[tuple]:
     def label(text: str) -> str:  # an indented row is a variant of the row above
         return "↳ " + text.strip() if text.startswith("  ") else text
 
-    return [r if len(r) == 1 else (label(r[0]), cell(r[1]), cell(r[2]))
+    return [r if len(r) == 1 else (label(r[0]), *(cell(v) for v in r[1:]))
             for r in table_rows(m, paper)]

@@ -15,7 +15,8 @@ paper-vs-simulation table (:mod:`.report`), saves the figures (:mod:`.plots`), t
 with ``docs_dir``, the results page (:mod:`.docs`, ``docs/reproductions/yamauchi.md``), where
 the measured numbers, the departure from the paper and what limits the result are discussed.
 The fitted model the tracked env observes with is version-controlled data
-(:mod:`.model_file`).
+(:mod:`.model_file`). ``Settings(vehicle="tracked_patako_wong_chiang", soil="dry_sand")``
+re-runs everything with the Wong-Chiang track model and a loose dry sand (issue 16).
 """
 
 from .circle import LimitObservation, circle_episode, mean_episodes

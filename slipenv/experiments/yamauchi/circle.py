@@ -84,7 +84,7 @@ class LimitObservation(gym.Wrapper):
 
 def circle_episode(cfg: Settings, pole_rps: float, feedforward: bool, estimator: str,
                    estimator_kwargs: dict, seed: int, tilt_deg: float,
-                   soil: str = "toyoura_sand", steer_on: str = "observation") -> dict:
+                   soil: str | None = None, steer_on: str = "observation") -> dict:
     """One lap of the circle; the law's gains from a triple pole at ``pole_rps`` [rad/s].
 
     ``steer_on`` (:data:`~.settings.STEER_ON`) selects what the law sees: the env's
@@ -94,7 +94,8 @@ def circle_episode(cfg: Settings, pole_rps: float, feedforward: bool, estimator:
     """
     if steer_on not in STEER_ON:
         raise ValueError(f"steer_on must be one of {STEER_ON}, got {steer_on!r}")
-    env = make_world(tilt_deg, soil, path=circle(cfg.circle_radius_m, cfg.speed_mps),
+    env = make_world(tilt_deg, soil if soil is not None else cfg.soil, cfg.vehicle,
+                     path=circle(cfg.circle_radius_m, cfg.speed_mps),
                      estimator=estimator, estimator_kwargs=estimator_kwargs)
     if steer_on != "observation":
         env = LimitObservation(env, steer_on, estimator_kwargs.get("n"))

@@ -113,7 +113,8 @@ def rotation_run(cfg: Settings, tilt_deg: float, rate_dps: float, direction: int
                  heading_rad: float, name: str) -> RotationRun:
     """Drive a constant twist (``cfg.speed_mps``, ±``rate_dps``) from rest until the true
     heading has turned ``cfg.rotation_deg``, or ``cfg.max_rotation_s`` has passed."""
-    env = make_world(tilt_deg, path=straight(5.0, cfg.speed_mps, heading_rad),
+    env = make_world(tilt_deg, cfg.soil, cfg.vehicle,
+                     path=straight(5.0, cfg.speed_mps, heading_rad),
                      estimator="gyrodometry", estimator_kwargs={}, max_cross_track_m=10.0)
     spec, dt_s = env.unwrapped.vehicle, env.unwrapped.control_dt_s
     action = np.array([cfg.speed_mps / spec.max_speed_mps,

@@ -35,6 +35,10 @@ class Settings:
     circle_radius_m: float = 0.25  # §3.1
     circle_seeds: int = 5  # §3.1 ran each law three times
     poles_rps: tuple[float, ...] = (0.15, 0.25, 0.4, 0.6, 1.0)  # rigid-ground gain search
+    # The world: None keeps the env preset's (tracked_patako, per-wheel law, toyoura_sand);
+    # "tracked_patako_wong_chiang" and "dry_sand" run the Wong-Chiang track model (issue 16).
+    vehicle: str | None = None
+    soil: str | None = None
 
     def __post_init__(self) -> None:
         if not self.tilts_deg or any(not 0.0 <= t < 90.0 for t in self.tilts_deg):

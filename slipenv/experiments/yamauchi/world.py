@@ -7,9 +7,16 @@ import gymnasium as gym
 from .settings import ENV_ID
 
 
-def make_world(tilt_deg: float, soil: str = "toyoura_sand", **kwargs) -> gym.Env:
+def make_world(tilt_deg: float, soil: str | None = None, vehicle: str | None = None,
+               **kwargs) -> gym.Env:
     """``slipenv/TrackedSlopeCircle-v0`` on a slope of ``tilt_deg`` [deg] (downhill -y), or on
-    flat ground at 0°; ``kwargs`` override further preset fields."""
+    flat ground at 0°; ``soil`` and ``vehicle`` (names) replace the preset's when given (e.g.
+    ``dry_sand`` and ``tracked_patako_wong_chiang``, the Wong-Chiang track model of issue 16);
+    ``kwargs`` override further preset fields."""
     terrain = ({"kind": "slope", "slope_deg": float(tilt_deg), "downhill_azimuth_deg": -90.0}
                if tilt_deg > 0.0 else "flat")
-    return gym.make(ENV_ID, terrain=terrain, soil=soil, **kwargs)
+    if soil is not None:
+        kwargs["soil"] = soil
+    if vehicle is not None:
+        kwargs["vehicle"] = vehicle
+    return gym.make(ENV_ID, terrain=terrain, **kwargs)

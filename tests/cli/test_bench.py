@@ -1,0 +1,79 @@
+"""``slipenv bench``'s breakdown, Coulomb reference and vectorised figure (issue 15, item 5)."""
+
+from __future__ import annotations
+
+import json
+
+import gymnasium as gym
+import pytest
+
+import slipenv.bench as bench
+from slipenv.cli import main
+from slipenv.pybullet_quiet import import_pybullet
+
+p = import_pybullet()
+ENV = "slipenv/HuskySand-v0"
+
+
+@pytest.fixture(scope="module")
+def husky_result():
+    return bench.run_bench([ENV], steps=20, repeats=1, progress=False, vec=False)
+
+
+def test_breakdown_components_are_non_negative_and_add_up_to_the_total(husky_result):
+    b = husky_result["envs"][ENV]["breakdown_us_per_step"]
+    assert set(b) == set(bench.BREAKDOWN_KEYS)
+    parts = [b[k] for k in bench.BREAKDOWN_KEYS if k != "total"]
+    assert all(v >= 0.0 for v in parts)
+    assert sum(parts) == pytest.approx(b["total"], abs=0.1 * len(parts))  # rounding to 0.1 us
+    # the physics and the force law run at every substep: neither can be missing
+    assert b["step_simulation"] > 0.0 and b["force_injection"] > 0.0
+    assert b["sensors"] > 0.0 and b["estimator"] > 0.0 and b["observation_reward"] > 0.0
+
+
+def test_coulomb_reference_is_reported_next_to_the_env_rate(husky_result):
+    r = husky_result["envs"][ENV]
+    assert r["coulomb_env_steps_per_s"] > 0.0
+    assert r["vs_coulomb"] == pytest.approx(r["env_steps_per_s"] / r["coulomb_env_steps_per_s"],
+                                            rel=1e-2)
+    assert "vec_env_steps_per_s" not in r  # vec=False
+    assert husky_result["settings"]["coulomb_mu"] == pytest.approx(0.81)
+
+
+def test_coulomb_reference_restores_the_worlds_friction_and_the_timers_are_removed():
+    env = gym.make(ENV)
+    try:
+        env.reset(seed=0)
+        base = env.unwrapped
+        client = base.physics_client_id
+        links = bench._links(client)
+        before = [p.getDynamicsInfo(b, link, physicsClientId=client)[1] for b, link in links]
+        assert bench.coulomb_steps_per_s(client, 3, base.substeps_per_step) > 0.0
+        after = [p.getDynamicsInfo(b, link, physicsClientId=client)[1] for b, link in links]
+        assert after == before
+        bench.step_breakdown(env, 3)
+        assert p.stepSimulation.__name__ == "stepSimulation"
+        assert "update" not in vars(base.estimator) and "_observe" not in vars(base)
+    finally:
+        env.close()
+
+
+def test_bench_json_keeps_its_schema_and_adds_breakdown_and_vec(tmp_path):
+    path = tmp_path / "bench.json"
+    assert main(["bench", ENV, "--steps", "5", "--repeats", "1", "--quiet",
+                 "--json", str(path)]) == 0
+    data = json.loads(path.read_text())
+    entry = data["envs"][ENV]
+    for key in ("env_steps_per_s", "substeps_per_step", "bare_substeps_per_s", "ratio",
+                "vehicle", "wheels", "realtime_factor"):
+        assert key in entry
+    assert set(entry["breakdown_us_per_step"]) == set(bench.BREAKDOWN_KEYS)
+    assert entry["vec_processes"] == bench.VEC_PROCESSES and entry["vec_env_steps_per_s"] > 0
+    assert data["settings"]["vec_processes"] == bench.VEC_PROCESSES
+
+
+def test_format_shows_the_breakdown_table(husky_result):
+    text = bench.format_bench(husky_result)
+    assert "vs coulomb" in text and "us per control step" in text
+    breakdown = text.split("us per control step", 1)[1].splitlines()
+    assert any(line.startswith(ENV) for line in breakdown)

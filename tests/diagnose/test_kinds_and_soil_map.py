@@ -1,0 +1,137 @@
+"""Issue 14 items 3-4: every vehicle kind is diagnosed (rover4ws included; torque slip on
+skid-steer and rover logs), and soil that varies in space is mapped as regions of a grid that
+the simulation takes as a ``PatchSoilMap``. Logs from the kinematic generator."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from slipenv.diagnose import synth
+from slipenv.diagnose.cli import diagnose
+from slipenv.diagnose.effects import effect
+from slipenv.diagnose.extension import apply_model
+from slipenv.diagnose.fit import Problem, fit
+from slipenv.diagnose.kinematic import KinematicTruth, SoilRegion, kinematic_log
+from slipenv.diagnose.replay import build_segments, simulate
+from slipenv.diagnose.select import cross_validate, make_folds
+from slipenv.envs.factory import make_soil_map
+from slipenv.terramechanics.soil_map import PatchSoilMap
+
+Z_LIMIT = 3.0
+
+
+def _quiet(fn, *args, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return fn(*args, **kwargs)
+
+
+def test_nominal_rover_replay_follows_a_clean_rover_log():
+    # the double-Ackermann replay of the logged wheel angles and steering reproduces the pose
+    log = kinematic_log(1, None, kind="rover4ws", duration_s=30.0, slip_sigma=0.0)
+    seg = build_segments([log], segment_s=10.0)
+    pred = simulate(seg, {})
+    err = np.hypot(*(pred[..., :2] - seg.gt[..., :2])[seg.gt_ok].T)
+    travel = 0.5 * 10.0  # [m] 0.5 m/s over a segment
+    assert np.max(err) < 0.002 * travel + 0.005  # encoder quantisation and 1 mm truth noise
+
+
+def test_a_rover_log_is_diagnosed_and_its_radius_error_named():
+    truth = KinematicTruth(0.1, 0.1015, 0.5)  # right wheels 1.5 % larger
+    report, _ = _quiet(diagnose, [kinematic_log(7, truth, kind="rover4ws", duration_s=90.0)],
+                       "<rover>")
+    assert report["vehicle_kind"] == "rover4ws"
+    assert report["cause"] == "rolling_radius", report["candidates"]
+    for wheel, true in (("front_right", 0.1015), ("rear_right", 0.1015),
+                        ("front_left", 0.1), ("rear_left", 0.1)):
+        value, se = report["parameters"][f"radius_{wheel}_m"]
+        assert abs(value - true) <= Z_LIMIT * se + 2e-4 * true, (wheel, value, se)
+
+
+def test_a_clean_rover_log_gives_none():
+    report, _ = _quiet(diagnose, [kinematic_log(8, None, kind="rover4ws", duration_s=90.0)],
+                       "<rover>")
+    assert report["cause"] == "none" and report["also"] == [], report["candidates"]
+
+
+@pytest.mark.parametrize("kind", ["skid_steer", "rover4ws"])
+def test_torque_slip_is_fitted_and_predicts_held_out_segments_on_every_kind(kind):
+    c_true = 0.006  # [1/(N m)]: 3 % slip at the generator's 5 N m
+    log = kinematic_log(9, None, kind=kind, duration_s=60.0, torque_slip_per_nm=c_true)
+    problem = Problem.from_segments(build_segments([log]))
+    assert effect("torque_slip").applicable(problem.seg) is None
+    folds = make_folds(problem.seg)
+    base = _quiet(cross_validate, problem, (), folds)
+    cand = _quiet(cross_validate, problem, ("torque_slip",), folds)
+    assert cand.errors.sum() < 0.2 * base.errors.sum()
+    f = _quiet(fit, problem, ("torque_slip",))
+    for name, value in f.params["torque_slip"].__dict__.items():
+        se = f.se["torque_slip"][name]
+        assert abs(value - c_true) <= Z_LIMIT * se + 0.02 * c_true, (name, value, se)
+
+
+def test_turning_slip_stays_a_skid_steer_effect():
+    seg = build_segments([kinematic_log(2, None, kind="rover4ws", duration_s=30.0)])
+    assert effect("turning_slip").applicable(seg) is not None
+
+
+# Two rectangles of softer soil, not aligned with any grid, in an 8 m field swept lane by lane.
+REGIONS = (SoilRegion(-4.0, -4.0, -0.5, 0.0, 0.008), SoilRegion(1.0, 0.5, 4.0, 4.0, 0.006))
+
+
+@pytest.fixture(scope="module")
+def field_problem():
+    log = kinematic_log(3, None, duration_s=180.0, route="field", soil_regions=REGIONS)
+    return Problem.from_segments(build_segments([log]))
+
+
+def _truth_compliance(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    c = np.zeros(np.broadcast(x, y).shape)
+    for region in REGIONS:
+        c = c + np.where(region.contains(x, y), region.compliance_per_nm, 0.0)
+    return c
+
+
+def test_soil_regions_are_mapped_and_the_map_cuts_the_held_out_error(field_problem):
+    problem = field_problem
+    folds = make_folds(problem.seg)
+    base = _quiet(cross_validate, problem, (), folds)
+    single = _quiet(cross_validate, problem, ("torque_slip",), folds)
+    mapped = _quiet(cross_validate, problem, ("soil_map",), folds)
+    ratio = mapped.errors.sum() / base.errors.sum()
+    assert ratio < 0.6, ratio  # the map predicts segments it never saw
+    assert mapped.errors.sum() < 0.6 * single.errors.sum()  # one stiffness everywhere cannot
+    f = _quiet(fit, problem, ("soil_map",))
+    m = f.params["soil_map"]
+    assert int(round(m.regions)) >= 2
+    # where the route went, the map's stiffness matches the truth's soft/firm split
+    pos = problem.seg.pos[np.abs(problem.seg.dphi).sum(axis=-1) > 0]
+    fitted, true = m.compliance_at(pos), _truth_compliance(pos[:, 0], pos[:, 1])
+    soft = true > 0
+    agree = np.mean((fitted > 0.5 * REGIONS[1].compliance_per_nm) == soft)
+    assert agree > 0.8, agree
+    for level in (0.006, 0.008):  # each soft region's compliance within 35 %: the grid's
+        near = np.isclose(true, level)  # cells are cut by the regions' edges, and a cell of
+        assert abs(np.median(fitted[near]) - level) < 0.35 * level  # the 0.006 region may
+        # fall in the 0.008 one's region (at most 3 regions, chosen on held-out data)
+
+
+def test_the_fitted_map_is_applied_to_the_simulation_as_patches(field_problem):
+    f = _quiet(fit, field_problem, ("soil_map",))
+    report = {"format": "slipenv-diagnosis/1", "cause": "soil_map", "also": [],
+              "parameters": f.report(field_problem.seg)}
+    config = synth.base_config("diff_drive")
+    extended = apply_model(config, report)
+    assert isinstance(extended.soil_map, PatchSoilMap)
+    soil_map = make_soil_map(extended.soil, extended.soil_map)
+    base = make_soil_map(config.soil, config.soil_map)
+    m = f.params["soil_map"]
+    for x, y in ((-2.5, -2.5), (2.5, 2.5)):  # inside the two soft rectangles
+        if m.compliance_at(np.array([x, y])) <= 0:
+            continue
+        assert soil_map.params_at(np.array([x]), np.array([y])) != \
+            base.params_at(np.array([x]), np.array([y]))
+    assert m.compliance_at(np.array([4.5, -4.0])) < 0.001  # firm ground stays firm

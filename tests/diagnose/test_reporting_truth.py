@@ -1,0 +1,151 @@
+"""Issue 11 item 7: a diagnosis never prints inf or NaN, an estimate whose standard error
+exceeds it is "not determined", an implausible no-ground-truth estimate is declared so, and a
+failing least-squares fit is an error naming the log."""
+
+from __future__ import annotations
+
+import json
+import re
+import warnings
+
+import numpy as np
+import pytest
+
+from slipenv.cli import main
+from slipenv.diagnose import fit as fit_module
+from slipenv.diagnose import proprio
+from slipenv.diagnose.cli import diagnose, summary
+from slipenv.diagnose.kinematic import KinematicTruth, kinematic_log
+from slipenv.diagnose.numbers import better, determined, estimate, num
+from slipenv.diagnose.report import markdown, write_json
+from slipenv.logs import Log, LogMeta, write_log
+
+NON_FINITE = re.compile(r"\b(inf|nan|infinity)\b", re.IGNORECASE)
+
+
+def _quiet_diagnose(log):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return diagnose([log], "<kinematic>")
+
+
+def _with_meta(log: Log, **vehicle) -> Log:
+    data = json.loads(json.dumps(log.meta.data))
+    data["vehicle"].update(vehicle)
+    return Log.from_arrays(LogMeta(data), **log.signals)
+
+
+@pytest.mark.parametrize(("value", "se", "ok"), [
+    (0.505, 0.0002, True), (74.552, 161.127, False), (-0.01, 0.02, False),
+    (1.0, float("inf"), False), (float("nan"), 0.1, False), (0.0, 0.0, True),
+])
+def test_an_estimate_is_determined_only_if_its_error_is_below_its_magnitude(value, se, ok):
+    assert determined(value, se) is ok
+    text = estimate(value, se)
+    assert not NON_FINITE.search(text)
+    assert ("±" in text) is ok
+
+
+def test_numbers_never_print_inf_or_nan():
+    for v in (float("inf"), -float("inf"), float("nan"), None, "x"):
+        assert num(v) == "n/a" and better(v) == "n/a"
+    assert better(-1.117) == "111.7 % worse" and better(0.25) == "25.0 % better"
+
+
+def test_summary_and_markdown_of_a_report_with_non_finite_numbers_print_none_of_them():
+    inf, nan = float("inf"), float("nan")
+    report = {"cause": "track_width", "also": [], "parameters": {"track_width_m": [74.6, 161.1],
+                                                                  "radius_left_m": [nan, inf]},
+              "determined": {"track_width_m": False, "radius_left_m": False},
+              "gain": {"metric": "position_rmse_m", "before": inf, "after": inf,
+                       "relative": nan},
+              "segments": {"count": 3, "duration_s": 3.0, "folds": 2, "fold_by": "log"},
+              "candidates": [{"cause": "track_width", "score": nan, "gain_relative": nan,
+                              "p_value": nan, "drift": inf, "significant": False}],
+              "thresholds": {"alpha": 0.01, "min_gain": 0.02, "min_drift": 0.001},
+              "consistency": {"nominal": {"nis_mean": inf, "nis_band_95": [nan, inf],
+                                          "autocorrelation": [nan],
+                                          "autocorrelation_band": inf}},
+              "log": "x", "warnings": []}
+    for text in (summary(report, 1.0), markdown(report, {}, None)):
+        assert not NON_FINITE.search(text), text
+        assert "not determined" in text.lower()
+    assert "74.6" not in summary(report)  # not printed as a number
+
+
+def test_json_report_holds_null_for_non_finite_values(tmp_path):
+    path = write_json({"a": float("inf"), "b": [np.float64("nan"), 1.0]}, tmp_path / "r.json")
+    assert json.loads(path.read_text()) == {"a": None, "b": [None, 1.0]}
+
+
+def test_a_determined_calibration_is_flagged_determined_in_json():
+    report, _ = _quiet_diagnose(kinematic_log(3, KinematicTruth(0.1, 0.1, 0.505),
+                                              duration_s=60.0))
+    assert report["cause"] == "track_width"
+    assert report["determined"] == {"track_width_m": True}
+    assert report["calibration"]["config_determined"] is True
+    assert report["warnings"] == []
+
+
+def test_a_wrong_nominal_geometry_is_warned_and_its_config_not_offered():
+    # meta.json says 9 m between the wheels of a 0.505 m robot: whatever the fit finds is no
+    # calibration of this vehicle
+    log = _with_meta(kinematic_log(1, KinematicTruth(0.1, 0.1, 0.505), duration_s=60.0),
+                     track_width_m=9.0)
+    report, _ = _quiet_diagnose(log)
+    text = summary(report, 1.0)
+    assert not NON_FINITE.search(text)
+    assert report["warnings"] and "meta.json" in report["warnings"][0]
+    assert "track_width_m" in report["warnings"][0]
+    assert report["calibration"]["config_determined"] is False
+    assert "NOT determined" in text and "warning:" in text
+    gain = report["gain"]["relative"]
+    assert ("worse" in text) == (gain < 0)
+
+
+def _gyro_only_log(seed: int, eta: float, noise: float, track_m: float = 0.57) -> Log:
+    """A kinematic log without ground truth whose gyro reads eta × the wheels' yaw rate."""
+    log = kinematic_log(seed, None, duration_s=60.0, track_m=track_m)
+    sig = log.signals
+    r, c = log.meta.wheel_radius_m, log.meta.counts_per_rad
+    rate = np.gradient(np.stack([sig["enc_left"], sig["enc_right"]]) / c, sig["t"], axis=1)
+    kin = r * (rate[1] - rate[0]) / track_m
+    rng = np.random.default_rng(seed)
+    cols = {k: v for k, v in sig.items() if not k.startswith("gt_")}
+    return Log.from_arrays(log.meta, require_ground_truth=False,
+                           gyro_z=eta * kin + rng.normal(0.0, noise, kin.size), **cols)
+
+
+@pytest.mark.parametrize(("eta", "noise", "why"), [
+    (0.0076, 0.002, "implausible"),  # W_eff ≈ 75 m on a 0.57 m track (the issue's Husky)
+    (0.0, 0.05, "not determined"),  # the gyro does not follow the wheels at all
+])
+def test_no_ground_truth_mode_declares_an_implausible_width_not_determined(eta, noise, why):
+    result = proprio.analyse([_gyro_only_log(5, eta, noise)], "<gyro-only>")
+    assert result["cause"] == "none" and result["parameters"] == {}
+    assert result["determined"] == {"track_width_m": False}
+    assert any(why in w for w in result["warnings"]), result["warnings"]
+    text = proprio.summary(result)
+    assert "not determined" in text and not NON_FINITE.search(text)
+
+
+def test_no_ground_truth_mode_still_finds_a_plausible_width():
+    result = proprio.analyse([_gyro_only_log(6, 0.7, 0.002)], "<gyro-only>")
+    assert result["cause"] == "track_width" and result["determined"]["track_width_m"]
+    w, se = result["parameters"]["track_width_m"]
+    assert abs(w - 0.57 / 0.7) < max(3 * se, 0.01)
+    assert result["warnings"] == []
+
+
+def test_a_failing_least_squares_fit_is_an_error_naming_the_log(tmp_path, monkeypatch, capsys):
+    folder = tmp_path / "run_7"
+    write_log(kinematic_log(2, KinematicTruth(0.1, 0.1, 0.505), duration_s=30.0), folder)
+
+    def broken(*args, **kwargs):
+        raise ValueError("Residuals are not finite in the initial point.")
+
+    monkeypatch.setattr(fit_module, "least_squares", broken)
+    assert main(["diagnose", str(folder), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "run_7" in err and "least-squares" in err and "not finite" in err
