@@ -16,6 +16,7 @@ numbers, output paths by writing to them); a bad one exits with status 2 and one
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 import tempfile
@@ -105,6 +106,31 @@ def experiment_name(text: str) -> str:
         raise argparse.ArgumentTypeError(f"unknown experiment {text!r}; known: "
                                          f"{', '.join(sorted(EXPERIMENT_MODULES))}")
     return text
+
+
+def tracked_vehicle_name(text: str) -> str:
+    """A tracked vehicle preset (``slipenv reproduce yamauchi --vehicle``)."""
+    from slipenv.vehicles.presets import VEHICLES
+
+    tracked = sorted(n for n, make in VEHICLES.items() if make().track_length_m is not None)
+    if text not in tracked:
+        raise argparse.ArgumentTypeError(f"unknown tracked vehicle {text!r}; known: "
+                                         f"{', '.join(tracked)}")
+    return text
+
+
+def soil_name(text: str) -> str:
+    """A soil preset (``slipenv reproduce yamauchi --soil``)."""
+    from slipenv.terramechanics.presets import SOILS
+
+    if text not in SOILS:
+        raise argparse.ArgumentTypeError(f"unknown soil {text!r}; known: "
+                                         f"{', '.join(sorted(SOILS))}")
+    return text
+
+
+WORLD_EXPERIMENTS = ("yamauchi",)
+"""The experiments whose world ``--vehicle``/``--soil`` can change."""
 
 
 def writable_dir(path: str | Path, option: str) -> Path:
@@ -227,18 +253,41 @@ def add_reproduce(sub: SubParsers) -> argparse.ArgumentParser:
     p.add_argument("--save-model", default=None, metavar="PATH",
                    help="yamauchi: also write the fitted slip model to PATH (maintainers: "
                         "slipenv/data/yamauchi_slip_model.json of a source checkout)")
-    p.add_argument("--docs", default=None, metavar="DIR", help="write the page DIR/NAME.md")
+    p.add_argument("--docs", default=None, metavar="DIR",
+                   help="write the page DIR/NAME.md (yamauchi in another world: "
+                        "DIR/yamauchi_<world>.md)")
+    p.add_argument("--vehicle", type=tracked_vehicle_name, default=None,
+                   help="yamauchi: run on this tracked vehicle preset "
+                        "(tracked_patako_wong_chiang: the Wong-Chiang track model; "
+                        "None: the env's tracked_patako)")
+    p.add_argument("--soil", type=soil_name, default=None,
+                   help="yamauchi: run on this soil preset (None: the env's toyoura_sand)")
     return p
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
+    world = {k: v for k, v in (("vehicle", args.vehicle), ("soil", args.soil)) if v is not None}
+    if world and args.name not in WORLD_EXPERIMENTS:
+        raise ValueError(f"{' and '.join('--' + k for k in world)} only "
+                         f"appl{'y' if len(world) > 1 else 'ies'} to "
+                         f"{', '.join(WORLD_EXPERIMENTS)}, not {args.name}")
+    if world and args.save_model:
+        from slipenv.experiments.yamauchi.settings import page_name
+
+        if page_name(args.vehicle, args.soil) != "yamauchi":
+            raise ValueError("--save-model writes the model the env observes with, fitted in "
+                             "the env's own world: not with another --vehicle/--soil")
     out_dir = writable_dir(_fill(args.out, name=args.name), "--out")
     json_path = writable_file(args.json, "--json")
     docs_dir = None if args.docs is None else str(writable_dir(args.docs, "--docs"))
     from slipenv.experiments import experiment
 
     run = experiment(args.name)
-    extra = {"save_model": args.save_model} if args.save_model else {}
+    extra: dict[str, Any] = {"save_model": args.save_model} if args.save_model else {}
+    if world:
+        from slipenv.experiments.yamauchi import QUICK, Settings
+
+        extra["settings"] = dataclasses.replace(QUICK if args.quick else Settings(), **world)
     result = run(quick=args.quick, out_dir=str(out_dir),
                  json_path=None if json_path is None else str(json_path), seed=args.seed,
                  progress=not args.quiet, docs_dir=docs_dir, **extra)

@@ -80,6 +80,22 @@ def test_an_unknown_experiment_or_missing_log_folder_is_one_line(no_work, capsys
     one_line_error(capsys, ["diagnose", str(tmp_path / "missing")], "no such log folder")
 
 
+@pytest.mark.parametrize("argv, needles", [
+    (["reproduce", "yamauchi", "--vehicle", "husky"],
+     ("--vehicle", "unknown tracked vehicle 'husky'", "tracked_patako_wong_chiang")),
+    (["reproduce", "yamauchi", "--soil", "mud"], ("--soil", "unknown soil 'mud'", "dry_sand")),
+    (["reproduce", "lindgren", "--soil", "dry_sand"], ("--soil only applies to yamauchi",)),
+    (["reproduce", "reina", "--vehicle", "tracked_patako_wong_chiang", "--soil", "dry_sand"],
+     ("--vehicle and --soil only apply to yamauchi", "not reina")),
+    (["reproduce", "yamauchi", "--soil", "dry_sand", "--save-model", "m.json"],
+     ("--save-model",)),
+])
+def test_a_world_the_experiment_cannot_run_is_one_line_before_the_work(no_work, capsys, tmp_path,
+                                                                        argv, needles):
+    one_line_error(capsys, argv + ["--out", str(tmp_path / "out")], *needles)
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.fixture
 def blocked(tmp_path):
     """A path nothing can be written under, even as root: its parent is a file."""

@@ -16,7 +16,9 @@ with ``docs_dir``, the results page (:mod:`.docs`, ``docs/reproductions/yamauchi
 the measured numbers, the departure from the paper and what limits the result are discussed.
 The fitted model the tracked env observes with is version-controlled data
 (:mod:`.model_file`). ``Settings(vehicle="tracked_patako_wong_chiang", soil="dry_sand")``
-re-runs everything with the Wong-Chiang track model and a loose dry sand (issue 16).
+re-runs everything with the Wong-Chiang track model and a loose dry sand (issue 16); on the
+command line ``slipenv reproduce yamauchi --vehicle tracked_patako_wong_chiang --soil dry_sand
+--docs DIR`` writes its page ``DIR/yamauchi_wong_chiang.md``.
 """
 
 from .circle import LimitObservation, circle_episode, mean_episodes

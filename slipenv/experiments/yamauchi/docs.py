@@ -4,11 +4,13 @@ the run."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from pathlib import Path as FsPath
 
 from ..docs_page import command_line, copy_figures, figure_list, markdown_table, write_page
 from .report import markdown_rows
+from .settings import DEFAULT_SOIL, DEFAULT_VEHICLE, ENV_ID, page_name, world_of
 
 CAPTIONS = {
     "fig4_endo_n": "Fig. 4 counterpart: Endo's n per tilt (log-log fit)",
@@ -18,8 +20,7 @@ CAPTIONS = {
 }
 
 SETUP = """\
-The `tracked_patako` vehicle on `toyoura_sand`, Janosi shear injected under each road wheel
-(`slipenv/TrackedSlopeCircle-v0`), repeats the paper's experiments:
+{world} repeats the paper's experiments:
 
 1. **Rotation runs (§2.3)**: heading across the slope (downhill to the right), track speeds for
    {speed_cm:g} cm/s and {rates} °/s, until the vehicle has turned {rotation:g}°, on slopes of
@@ -42,20 +43,27 @@ The `tracked_patako` vehicle on `toyoura_sand`, Janosi shear injected under each
 regressors carry the turning direction only in the sign of the angular displacement, but on a
 slope part of the slip angle is even in it (the turning centre moves towards the more loaded
 end of the tracks, uphill or downhill), so a fit to both directions averages that part away.
-The counter-clockwise model is the one the (counter-clockwise) circle uses and the one shipped
-in `slipenv/data`; the clockwise one is fitted and scored the same way and reported beside it
+The counter-clockwise model is the one the (counter-clockwise) circle uses{shipped}
 (held-out improvement over gyrodometry {cw_pct:.0f} % clockwise, {ccw_pct:.0f} %
 counter-clockwise). Endo's n is fitted on both directions, as Endo's relation is symmetric in
 them.
 """
 
-LIMITS = """\
+LIMITS_HEAD = """\
 ## What limits the result
 
 Measured, not argued (`metrics.limits` in the JSON, the table's `limit:` rows): the odometry
 replayed with the *true* slip angle in place of Eq. 9, which leaves only Endo's slip ratios as
 error, and the circle steered on that odometry and on the true pose and β.
+"""
 
+EXTRAPOLATION = """\
+- **Extrapolation.** The fitted Eq. 9 is evaluated only inside its training range
+  (`SlipAngleModel.feature_range`): on the circle the angular displacement reaches 2π, far
+  beyond the training rotations' {rotation:g}°.
+"""
+
+LIMITS = LIMITS_HEAD + """
 - **Odometry.** Even the true β leaves the slip-compensated odometry at {true_beta_ratio:.2f}
   of gyrodometry (the fitted Eq. 9: {fitted_ratio:.2f}; the paper: 0.18, target ≤ 0.4).
   Heading downhill the turning vehicle runs ahead of both tracks (the turn uses up the soil's
@@ -67,14 +75,79 @@ error, and the circle steered on that odometry and on the true pose and β.
   rigid ground by {truth_ff:.2f} (the target asks ≤ 0.5; halving it needs stiffer gains): the
   true slip angle of the turning vehicle swings by {swing:.0f}° (5-95 % range) around a lap,
   faster than the law follows.
-- **Extrapolation.** The fitted Eq. 9 is evaluated only inside its training range
-  (`SlipAngleModel.feature_range`): on the circle the angular displacement reaches 2π, far
-  beyond the training rotations' {rotation:g}°.
-
+""" + EXTRAPOLATION + """
 Issue 16 traces these limits to the track model (per-wheel slip states with no shear build-up
 along the track, no bulldozing resistance) and plans the physics that should let Endo's n and
 the targets emerge.
 """
+"""The limits of the env preset's world (per-wheel track law, `toyoura_sand`): its mechanism
+sentences were measured in that world."""
+
+LIMITS_MEASURED = LIMITS_HEAD + """
+- **Odometry.** The true β leaves the slip-compensated odometry at {true_beta_ratio:.2f} of
+  gyrodometry (the fitted Eq. 9: {fitted_ratio:.2f}; the paper: 0.18, target ≤ 0.4). Endo's n
+  fitted per turning direction is {n_by_direction}.
+- **Circle.** On the odometry with the true β the feed-forward changes the mean error by a
+  factor {true_beta_ff:.2f} against feedback, and steered on the truth with the gains tuned on
+  rigid ground by {truth_ff:.2f} (the target asks ≤ 0.5); the true slip angle of the turning
+  vehicle swings by {swing:.0f}° (5-95 % range) around a lap.
+""" + EXTRAPOLATION + """
+This run measures the numbers, not the mechanisms behind them in this world; those measured
+for the per-wheel law on `toyoura_sand` are discussed in [yamauchi.md](yamauchi.md).
+"""
+"""The limits of any other world: only what this run's numbers say."""
+
+DEFAULT_WORLD = """\
+The `tracked_patako` vehicle on `toyoura_sand`, Janosi shear injected under each road wheel
+(`slipenv/TrackedSlopeCircle-v0`),"""
+
+VEHICLE_MODELS = {
+    "tracked_patako": "Janosi shear injected under each road wheel",
+    "tracked_patako_wong_chiang": (
+        "one Janosi shear field along each track, advected with the belt (Wong & Chiang "
+        "2001), stress against the sliding velocity, pressure from the road-wheel loads, "
+        "Bekker sinkage with Lyasko's slip-sinkage, compaction resistance as a rut state, "
+        "Rankine side-wall (bulldozing) pressure with a berm that grows with the swept volume "
+        "(`slipenv/terramechanics/track.py`, `slipenv/sim/track_soil.py`)"),
+}
+"""One sentence on each tracked vehicle's soil model (the track model of issue 16)."""
+
+SOIL_NOTES = {
+    "dry_sand": ("Wong's dry sand (LLL), a dry loose silica sand standing in for the paper's "
+                 "loosely poured Toyoura sand"),
+    "toyoura_sand": "the LETE constants standing in for the paper's Toyoura sand",
+}
+
+
+def soil_sentence(name: str) -> str:
+    """The soil preset ``name`` with its Bekker and strength constants, from the preset."""
+    from slipenv.terramechanics.presets import soil_by_name
+
+    soil = soil_by_name(name)
+    note = SOIL_NOTES.get(name)
+    return (f"soil `{name}`{': ' + note if note else ''} (c = {soil.cohesion_pa / 1e3:g} kPa, "
+            f"φ = {math.degrees(soil.friction_angle_rad):g}°, K = "
+            f"{100 * soil.shear_modulus_m:g} cm, n = {soil.n_exp:g}, k_c = "
+            f"{soil.k_c / 1e3:g} kN/m^(n+1), k_φ = {soil.k_phi / 1e3:g} kN/m^(n+2))")
+
+
+def world_text(vehicle: str | None, soil: str | None) -> str:
+    """The opening words of the setup: the vehicle and soil of the run."""
+    v, s = world_of(vehicle, soil)
+    if (v, s) == (DEFAULT_VEHICLE, DEFAULT_SOIL):
+        return DEFAULT_WORLD
+    return f"The `{v}` vehicle on `{s}` (`{ENV_ID}` with its world replaced)"
+
+
+def world_details(vehicle: str | None, soil: str | None) -> str:
+    """The world of a run outside the env preset's: its vehicle's soil model and its soil's
+    constants, one bullet each ("" for the preset's world, which the setup describes)."""
+    v, s = world_of(vehicle, soil)
+    if (v, s) == (DEFAULT_VEHICLE, DEFAULT_SOIL):
+        return ""
+    model = VEHICLE_MODELS.get(v)
+    return (f"The same experiments as [yamauchi.md](yamauchi.md), with the world changed:\n\n"
+            f"- vehicle `{v}`{': ' + model if model else ''};\n- {soil_sentence(s)}.")
 
 
 def page_body(result: dict, figures: Sequence[str], command: str) -> str:
@@ -99,28 +172,49 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
         truth_ff=lim["path_following"]["truth"]["feedforward_to_feedback_mean"],
         swing=lim["path_following"]["truth"]["feedback"]["slip_angle_swing_deg"],
     )
+    default = world_of(cfg.get("vehicle"), cfg.get("soil")) == (DEFAULT_VEHICLE, DEFAULT_SOIL)
+    values["world"] = world_text(cfg.get("vehicle"), cfg.get("soil"))
+    values["shipped"] = ((" and the one shipped\nin `slipenv/data`" if default else "")
+                         + "; the clockwise one is fitted and scored the same way and reported "
+                         "beside it")
     run = "quick" if result["quick"] else "full"
     met = sum(bool(v) for v in m["targets_met"].values())
     parts = [
-        "# Yamauchi et al. re-run in simulation",
+        "# Yamauchi et al. re-run in simulation" + ("" if default else ": `{}` on `{}`".format(
+            *world_of(cfg.get("vehicle"), cfg.get("soil")))),
         "Yamauchi, Nagatani, Hashimoto and Fujino, \"Slip compensated odometry for a tracked "
         "vehicle when rotating on a loose weak slope\": slip-compensated odometry (§2, Eq. 1-9) "
         "and slip-angle feed-forward path following (§3, Eq. 9-10).",
         f"Generated by `{command}` ({run} run, seed {result['seed']}, "
         f"{m['run_time_s']:.0f} s). Code: `slipenv/experiments/yamauchi/`.",
-        "## What is run", SETUP.format(**values),
+        "## What is run", world_details(cfg.get("vehicle"), cfg.get("soil")),
+        SETUP.format(**values),
         "## Paper against simulation",
         markdown_table(("quantity", "paper", "simulation"), markdown_rows(result)),
         f"Targets of issue 4: {met} of {len(m['targets_met'])} met.",
-        LIMITS.format(**values),
+        (LIMITS if default else LIMITS_MEASURED).format(**values),
         "## Figures", figure_list(figures, CAPTIONS),
     ]
-    return "\n\n".join(p.strip() for p in parts)
+    return "\n\n".join(p.strip() for p in parts if p)
+
+
+def world_options(settings: dict) -> tuple[str, ...]:
+    """The ``--vehicle``/``--soil`` flags that select the run's world (none for the preset's)."""
+    opts: tuple[str, ...] = ()
+    for flag in ("vehicle", "soil"):
+        if settings.get(flag) is not None:
+            opts += (f"--{flag}", settings[flag])
+    return opts
 
 
 def write_results_page(result: dict, figures: Sequence[str | FsPath],
                        docs_dir: str | FsPath) -> FsPath:
-    """Write ``docs_dir/yamauchi.md`` and copy the figures to ``docs_dir/img/yamauchi/``."""
-    command = command_line("yamauchi", result["quick"], result["seed"], docs_dir)
-    relative = copy_figures(figures, docs_dir, "yamauchi")
-    return write_page(docs_dir, "yamauchi", command, page_body(result, relative, command))
+    """Write ``docs_dir/NAME.md`` and copy the figures to ``docs_dir/img/NAME/``; ``NAME`` is
+    :func:`~.settings.page_name` of the run's world (``yamauchi`` for the env preset's)."""
+    cfg = result["settings"]
+    name = page_name(cfg.get("vehicle"), cfg.get("soil"))
+    command = command_line("yamauchi", result["quick"], result["seed"], docs_dir,
+                           world_options(cfg))
+    relative = copy_figures(figures, docs_dir, name)
+    return write_page(docs_dir, name, command, page_body(result, relative, command),
+                      package="yamauchi")

@@ -132,7 +132,9 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
     settings : Settings, optional
         Overrides ``quick``.
     docs_dir : str, optional
-        Write the results page ``docs_dir/yamauchi.md`` (figures copied beside it).
+        Write the results page ``docs_dir/yamauchi.md`` (figures copied beside it); in
+        another world than the env preset's (``settings.vehicle``/``soil``),
+        ``docs_dir/yamauchi_<world>.md`` (:func:`~.settings.page_name`).
     """
     cfg = settings or (QUICK if quick else Settings())
     model_out = None if save_model is None else model_file.model_path(save_model)  # fail early

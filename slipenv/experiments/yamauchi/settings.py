@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 ENV_ID = "slipenv/TrackedSlopeCircle-v0"
+DEFAULT_VEHICLE = "tracked_patako"  # the env preset's world (per-wheel track law) ...
+DEFAULT_SOIL = "toyoura_sand"  # ... on the LETE constants of the paper's Toyoura sand
 ORACLE_MAX_SLIP_ANGLE_RAD = 1.5  # [rad] the true β is not clipped like a regression's (1 rad)
 TARGETS = {"odometry_ratio_max": 0.4, "feedforward_ratio_max": 0.5}  # issue 4
 STEER_ON = ("observation", "true_beta", "truth")
@@ -58,3 +60,21 @@ class Settings:
 
 
 QUICK = Settings(repeats=2, circle_seeds=3, poles_rps=(0.15, 0.3, 0.6))
+
+
+def world_of(vehicle: str | None, soil: str | None) -> tuple[str, str]:
+    """The (vehicle, soil) names a run uses: ``None`` is the env preset's."""
+    return vehicle or DEFAULT_VEHICLE, soil or DEFAULT_SOIL
+
+
+def page_name(vehicle: str | None, soil: str | None) -> str:
+    """The results page of a world: ``yamauchi`` for the env preset's, ``yamauchi_wong_chiang``
+    for the Wong-Chiang track model on ``dry_sand`` (issue 16), else ``yamauchi_<vehicle>_<soil>``
+    with the preset's name left out when it is kept."""
+    v, s = world_of(vehicle, soil)
+    if (v, s) == (DEFAULT_VEHICLE, DEFAULT_SOIL):
+        return "yamauchi"
+    if (v, s) == ("tracked_patako_wong_chiang", "dry_sand"):
+        return "yamauchi_wong_chiang"
+    parts = [x for x, default in ((v, DEFAULT_VEHICLE), (s, DEFAULT_SOIL)) if x != default]
+    return "yamauchi_" + "_".join(parts)
