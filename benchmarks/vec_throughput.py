@@ -35,10 +35,9 @@ import statistics
 import time
 
 import gymnasium as gym
-import numpy as np
 
 import slipenv  # noqa: F401  (registers the envs)
-from slipenv.bench import BENCH_ACTION, WARMUP_STEPS, vec_steps_per_s
+from slipenv.bench import BENCH_ACTION, WARMUP_STEPS, batched_steps_per_s, vec_steps_per_s
 
 PROCESSES = (1, 2, 4)
 
@@ -68,13 +67,7 @@ def sb3_steps_per_s(env_id: str, n: int, steps: int) -> float:
     try:
         envs.seed(0)
         envs.reset()
-        actions = np.tile(BENCH_ACTION, (n, 1))
-        for _ in range(WARMUP_STEPS):
-            envs.step(actions)
-        t0 = time.perf_counter()
-        for _ in range(steps):
-            envs.step(actions)
-        return n * steps / (time.perf_counter() - t0)
+        return batched_steps_per_s(envs, n, steps)
     finally:
         envs.close()
 

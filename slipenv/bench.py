@@ -307,15 +307,21 @@ def vec_steps_per_s(env_id: str, num_envs: int = VEC_PROCESSES, steps: int = 200
     envs = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode=mode)
     try:
         envs.reset(seed=0)
-        actions = np.tile(BENCH_ACTION, (num_envs, 1))
-        for _ in range(WARMUP_STEPS):
-            envs.step(actions)
-        t0 = time.perf_counter()
-        for _ in range(steps):
-            envs.step(actions)
-        return num_envs * steps / (time.perf_counter() - t0)
+        return batched_steps_per_s(envs, num_envs, steps)
     finally:
         envs.close()
+
+
+def batched_steps_per_s(envs, num_envs: int, steps: int) -> float:
+    """Total env steps/s of an already reset vector env (gymnasium's or SB3's): ``steps`` batched
+    steps of the bench action, timed after ``WARMUP_STEPS`` untimed ones."""
+    actions = np.tile(BENCH_ACTION, (num_envs, 1))
+    for _ in range(WARMUP_STEPS):
+        envs.step(actions)
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        envs.step(actions)
+    return num_envs * steps / (time.perf_counter() - t0)
 
 
 class _Collect(logging.Handler):
