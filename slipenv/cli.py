@@ -98,35 +98,34 @@ def existing_dir(text: str) -> str:
     return text
 
 
+def _one_of(text: str, known, what: str) -> str:
+    """``text`` if it is one of ``known``, else the one-line "unknown ``what``" error."""
+    if text in known:
+        return text
+    raise argparse.ArgumentTypeError(f"unknown {what} {text!r}{did_you_mean(text, known)}; "
+                                     f"known: {', '.join(sorted(known))}")
+
+
 def experiment_name(text: str) -> str:
     """A known experiment of ``slipenv reproduce``."""
     from slipenv.experiments import EXPERIMENT_MODULES
 
-    if text not in EXPERIMENT_MODULES:
-        raise argparse.ArgumentTypeError(f"unknown experiment {text!r}; known: "
-                                         f"{', '.join(sorted(EXPERIMENT_MODULES))}")
-    return text
+    return _one_of(text, EXPERIMENT_MODULES, "experiment")
 
 
 def tracked_vehicle_name(text: str) -> str:
     """A tracked vehicle preset (``slipenv reproduce yamauchi --vehicle``)."""
     from slipenv.vehicles.presets import VEHICLES
 
-    tracked = sorted(n for n, make in VEHICLES.items() if make().track_length_m is not None)
-    if text not in tracked:
-        raise argparse.ArgumentTypeError(f"unknown tracked vehicle {text!r}; known: "
-                                         f"{', '.join(tracked)}")
-    return text
+    tracked = [n for n, make in VEHICLES.items() if make().track_length_m is not None]
+    return _one_of(text, tracked, "tracked vehicle")
 
 
 def soil_name(text: str) -> str:
     """A soil preset (``slipenv reproduce yamauchi --soil``)."""
     from slipenv.terramechanics.presets import SOILS
 
-    if text not in SOILS:
-        raise argparse.ArgumentTypeError(f"unknown soil {text!r}; known: "
-                                         f"{', '.join(sorted(SOILS))}")
-    return text
+    return _one_of(text, SOILS, "soil")
 
 
 WORLD_EXPERIMENTS = ("yamauchi",)

@@ -38,7 +38,7 @@ from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.wheel_soil import WheelContactState
 from slipenv.terramechanics.models import ForceModel
 from slipenv.terramechanics.soil import SoilParams
-from slipenv.terramechanics.soil_map import SoilMap, UniformSoil
+from slipenv.terramechanics.soil_map import SoilMap, UniformSoil, soil_rows
 from slipenv.terramechanics.track import (
     advance_shear,
     advance_wall,
@@ -227,15 +227,12 @@ class TrackSoilInjector:
         if uniform and not force:
             return
         if uniform:
-            rows = [self.soil_map.params_at(np.zeros(1), np.zeros(1))] * len(self.tracks)
+            rows = soil_rows(self.soil_map, [0.0] * len(self.tracks), [0.0] * len(self.tracks))
         else:
             pos, orn = p.getBasePositionAndOrientation(self.body_id, physicsClientId=self.client)
             rot = p.getMatrixFromQuaternion(orn)
-            xs = np.array([pos[0] + rot[1] * y for y in self.y])
-            ys = np.array([pos[1] + rot[4] * y for y in self.y])
-            params = self.soil_map.params_at(xs, ys)
-            rows = [type(params)(*((v[i] if isinstance(v, np.ndarray) and v.ndim else v)
-                                   for v in params)) for i in range(len(self.tracks))]
+            rows = soil_rows(self.soil_map, [pos[0] + rot[1] * y for y in self.y],
+                             [pos[1] + rot[4] * y for y in self.y])
         self._soil_rows = rows
         col = lambda f: np.array([[float(f(sp))] for sp in rows])  # noqa: E731
         self._c = col(lambda sp: sp.cohesion_pa)

@@ -47,7 +47,7 @@ from slipenv.terramechanics.slip_dynamics import (
     rut_resistance_vector_n,
 )
 from slipenv.terramechanics.soil import SoilParams
-from slipenv.terramechanics.soil_map import SoilMap, UniformSoil
+from slipenv.terramechanics.soil_map import SoilMap, UniformSoil, soil_rows
 from slipenv.vehicles.body import VehicleBody
 from slipenv.vehicles.spec import VehicleSpec
 
@@ -204,14 +204,11 @@ class WheelSoilInjector:
         if uniform and not force:
             return
         if uniform:
-            params = self.soil_map.params_at(np.zeros(1), np.zeros(1))
-            rows = [params] * self.n
+            rows = soil_rows(self.soil_map, [0.0] * self.n, [0.0] * self.n)
         else:
             links = p.getLinkStates(self.body_id, self.links, physicsClientId=self.client)
-            xs = np.array([ls[0][0] for ls in links])
-            ys = np.array([ls[0][1] for ls in links])
-            params = self.soil_map.params_at(xs, ys)
-            rows = [_params_row(params, k) for k in range(self.n)]
+            rows = soil_rows(self.soil_map, [ls[0][0] for ls in links],
+                             [ls[0][1] for ls in links])
         self._soil_rows = rows
         self._sigma = [self._relaxation_m(sp, k) for k, sp in enumerate(rows)]
         self._h = [self.dt_s / sigma for sigma in self._sigma]
@@ -458,13 +455,6 @@ class WheelSoilInjector:
         """Motor torque of each spin joint at the last substep [N m]."""
         states = p.getJointStates(self.body_id, self.spin_joints, physicsClientId=self.client)
         return [js[3] for js in states]
-
-
-def _params_row(params: SoilParams, k: int) -> SoilParams:
-    """The soil parameters of wheel ``k`` from per-wheel arrays (scalars pass through)."""
-    return type(params)(*(
-        (v[k] if isinstance(v, np.ndarray) and v.ndim else v) for v in params
-    ))
 
 
 def _bekker_row(params: SoilParams) -> tuple[float, float, float, float]:

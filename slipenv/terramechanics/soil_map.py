@@ -297,3 +297,16 @@ class GridSoilMap:
         weight = np.array([ux * uy, tx * uy, ux * ty, tx * ty])
         values = np.einsum("kn,knf->fn", weight, self._matrix[self._node_soil[k + self._offsets]])
         return SoilParams(*values)
+
+
+def soil_rows(soil_map: SoilMap, x_m: Sequence[float], y_m: Sequence[float]) -> list[SoilParams]:
+    """The soil (floats) at each point: one `SoilParams` per point, for per-contact kernels.
+
+    A `UniformSoil` gives the same object for every point (and is not queried per point), so a
+    caller may cache what it derives from a row by the row's identity.
+    """
+    if isinstance(soil_map, UniformSoil):
+        return [soil_map.params_at(np.zeros(1), np.zeros(1))] * len(x_m)
+    params = soil_map.params_at(np.asarray(x_m, float), np.asarray(y_m, float))
+    return [type(params)(*((v[k] if isinstance(v, np.ndarray) and v.ndim else v)
+                           for v in params)) for k in range(len(x_m))]

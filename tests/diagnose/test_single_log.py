@@ -90,7 +90,9 @@ def test_sign_flip_is_exact_for_few_blocks():
     assert horizon.sign_flip(np.zeros(4)) == 1.0
 
 
-@pytest.mark.skipif(not OPTIODOM.is_dir(), reason="OptiOdom data not available")
+@pytest.mark.skipif(not OPTIODOM.is_dir(), reason=(
+    f"the real OptiOdom logs are not at {OPTIODOM} (they sit in shared/data/real beside the "
+    "checkout; the kinematic tests above cover the method)"))
 @pytest.mark.parametrize("name", ["circular_250620202119_run-05",
                                   "square_230620202144_run-06"])
 def test_single_real_optiodom_drifting_run_gets_a_geometric_cause(name):

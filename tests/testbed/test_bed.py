@@ -68,8 +68,13 @@ def test_at_small_slip_the_bed_matches_reinas_law_at_the_imposed_slip_angle(rein
             assert (t.fx_n, t.fy_n) == pytest.approx((fx, fy), rel=0.05, abs=0.05), t
 
 
-@pytest.mark.xfail(strict=True, reason="slip_dynamics relaxes tan_beta to v_lat/(r omega) in "
-                   "drive, not Reina's v_lat/v_x (Eq. 4): F_y falls short at large slip")
+@pytest.mark.xfail(strict=True, reason=(
+    "known modelling defect, kept visible: slip_dynamics.relax_slip relaxes tan(beta) to "
+    "v_lat / max(|r omega|, |v_x|), which is v_lat/(r omega) in drive, not Reina's v_lat/v_x "
+    "(Eq. 4); at large slip the bed's side force therefore falls short of the law at the "
+    "imposed angle (small slips match within 5 %, test above). Changing the state equation "
+    "moves every vehicle's lateral dynamics and the reproductions, so it waits for a physics "
+    "change that re-runs them (issue 16 closing note)"))
 def test_at_large_slip_the_bed_matches_reinas_law_at_the_imposed_slip_angle(reina_sweep):
     for t in reina_sweep:
         fx, fy = law(t.slip_ratio, math.tan(math.radians(t.slip_angle_deg)), t.normal_load_n)
