@@ -31,10 +31,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from slipenv.pybullet_quiet import import_pybullet
+from slipenv.sim.compiled import wheel_loop_module
 from slipenv.terramechanics.bekker import rut_following_compaction_n
 from slipenv.terramechanics.models import ForceModel, wheel_kernel
 from slipenv.terramechanics.slip_dynamics import (
@@ -127,6 +129,12 @@ class WheelSoilInjector:
         If True, a wheel running in the rut of the wheel ahead of it (same side, its contact
         within half a width of that wheel's line) meets only the compaction of the soil below
         that rut (`bekker.multi_pass_compaction_n`). Default False.
+    compiled : bool or None
+        Run the substep loop compiled (``slipenv/sim/_wheel_loop.c``, a transcription of this
+        class's Python loop, tested bit for bit against it): None (default) when it was built
+        and the force model is one of slipenv's (`ForceModel.kernel_constants`), True to
+        require it (ValueError if it cannot), False for the Python loop
+        (`slipenv.sim.compiled`).
     """
 
     def __init__(
@@ -144,6 +152,7 @@ class WheelSoilInjector:
         damping_ratio: float = 0.5,
         damping_speed_mps: float = 0.2,
         multi_pass: bool = False,
+        compiled: bool | None = None,
     ) -> None:
         for key, value in (("dt_s", dt_s), ("min_relaxation_m", min_relaxation_m),
                            ("resistance_stick_m", resistance_stick_m),
@@ -179,22 +188,85 @@ class WheelSoilInjector:
         self.multi_pass = bool(multi_pass)
         self._f_r = float(getattr(force_model, "rolling_resistance_coeff", 0.0))
         self.leaders = _rut_leaders(spec) if self.multi_pass else [(-1, -1)] * self.n
+        self._loop = self._compiled_loop(compiled)
+        if self._loop is not None:
+            # The substep is the C loop itself: no Python frame per substep.
+            self.apply = self._loop.apply  # type: ignore[method-assign]
         self.reset()
+
+    def _compiled_loop(self, compiled: bool | None) -> Any:
+        """The compiled loop for this vehicle, or None for the Python loop (`compiled`)."""
+        if compiled is False:
+            return None
+        module = wheel_loop_module()
+        hook = getattr(self.force_model, "kernel_constants", None)
+        probe = hook(soil_rows(self.soil_map, [0.0], [0.0])[0]) if hook else None
+        if module is None or probe is None:
+            if compiled:
+                raise ValueError(
+                    "compiled=True but the compiled wheel loop is not available ("
+                    + ("not built or SLIPENV_PURE_PYTHON is set" if module is None else
+                       f"{type(self.force_model).__name__} is not one of slipenv's force "
+                       "models") + ")")
+            return None
+        return module.WheelLoop(p, self.body_id, self.ground_id, self.client, list(self.links),
+                                list(self.spin_joints), self.dt_s, self.resistance_stick_m,
+                                self.damping_speed_mps, self.low_speed_mps, self.multi_pass)
+
+    # The per-wheel state and the last substep's values live in the compiled loop when it runs
+    # (read here as lists), else in the Python attributes of the same names with a "_".
+    def _read(name: str) -> Any:  # noqa: N805 (a class-body helper, deleted below)
+        def get(self: WheelSoilInjector) -> Any:
+            loop = self._loop
+            return getattr(loop, name) if loop is not None else getattr(self, "_" + name)
+        return property(get, doc=f"Per-wheel ``{name}`` of the last substep (read-only).")
+
+    s = _read("s")
+    b = _read("b")
+    load = _read("load")
+    fx = _read("fx")
+    fy = _read("fy")
+    res = _read("res")
+    damper = _read("damper")
+    rut = _read("rut")
+    rut_vec = _read("rut_vec")
+    resistance_force_n = _read("resistance_force_n")
+    del _read
+
+    @property
+    def chassis_contact(self) -> bool:
+        """Whether a body other than a wheel touched the ground since it was last cleared."""
+        loop = self._loop
+        return bool(loop.chassis_contact) if loop is not None else self._chassis_contact
+
+    @chassis_contact.setter
+    def chassis_contact(self, value: bool) -> None:
+        if self._loop is not None:
+            self._loop.chassis_contact = bool(value)
+        else:
+            self._chassis_contact = bool(value)
+
+    @property
+    def is_compiled(self) -> bool:
+        """True if the substeps run in the compiled loop."""
+        return self._loop is not None
 
     def reset(self) -> None:
         """Zero the slip states and the recorded contact state."""
         n = self.n
-        self.s = [0.0] * n
-        self.b = [0.0] * n
-        self.load = [0.0] * n
-        self.fx = [0.0] * n
-        self.fy = [0.0] * n
-        self.res = [0.0] * n
-        self.damper = [0.0] * n
-        self.rut = [0.0] * n  # pre-sliding state of the resistance element (driven wheels)
-        self.rut_vec: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * n  # castors
-        self.resistance_force_n: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * n
-        self.chassis_contact = False
+        self._s = [0.0] * n
+        self._b = [0.0] * n
+        self._load = [0.0] * n
+        self._fx = [0.0] * n
+        self._fy = [0.0] * n
+        self._res = [0.0] * n
+        self._damper = [0.0] * n
+        self._rut = [0.0] * n  # pre-sliding state of the resistance element (driven wheels)
+        self._rut_vec: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * n  # castors
+        self._resistance_force_n: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * n
+        self._chassis_contact = False
+        if self._loop is not None:
+            self._loop.reset()
         self.sample_soil(force=True)
 
     # -- soil ------------------------------------------------------------------------------
@@ -224,6 +296,16 @@ class WheelSoilInjector:
         self._wheel_rows = [
             (k, self.links[k], self.driven[k], self.spin_index[k], self._r_eff[k], self._h[k],
              self._kernels[k], *self._damping[k], self._rut_damping[k]) for k in range(self.n)]
+        if self._loop is not None:
+            constants = {}
+            for sp in rows:
+                if id(sp) not in constants:
+                    constants[id(sp)] = self.force_model.kernel_constants(sp)
+            set_wheel = self._loop.set_wheel
+            for k, sp in enumerate(rows):
+                set_wheel(k, self.driven[k], self.spin_index[k], self._r_eff[k], self._h[k],
+                          *self._damping[k], self._rut_damping[k], *self.leaders[k],
+                          constants[id(sp)])
 
     def soil_at_wheel(self, k: int) -> SoilParams:
         """The soil (floats) under wheel ``k`` at the last `sample_soil` (read-only)."""
@@ -306,11 +388,11 @@ class WheelSoilInjector:
         links = p.getLinkStates(bid, self.links, 1, 0, cid)
         joints = p.getJointStates(bid, self.spin_joints, cid)
         load, patch = self._patches(contacts)
-        slip, tanb = self.s, self.b
+        slip, tanb = self._s, self._b
         fade_speed, low_speed = self.damping_speed_mps, self.low_speed_mps
-        stick, dt, rut, rut_vec = self.resistance_stick_m, self.dt_s, self.rut, self.rut_vec
+        stick, dt, rut, rut_vec = self.resistance_stick_m, self.dt_s, self._rut, self._rut_vec
         fx_out, fy_out, res_out, damp_out = [0.0] * n, [0.0] * n, [0.0] * n, [0.0] * n
-        force_out = self.resistance_force_n
+        force_out = self._resistance_force_n
         multi_pass = self.multi_pass
         apply_force, world, sqrt = p.applyExternalForce, p.WORLD_FRAME, math.sqrt
         zero3 = (0.0, 0.0, 0.0)
@@ -393,8 +475,8 @@ class WheelSoilInjector:
             force_out[k] = force
             if r_abs != 0.0:
                 apply_force(bid, link, force, centre, world, cid)
-        self.load, self.fx, self.fy, self.res, self.damper = (load, fx_out, fy_out, res_out,
-                                                              damp_out)
+        self._load, self._fx, self._fy, self._res, self._damper = (load, fx_out, fy_out,
+                                                                   res_out, damp_out)
 
     def _multi_pass(self, k: int, res: float, load_n: float, v_long: float,
                     loads: list[float]) -> float:
@@ -424,7 +506,7 @@ class WheelSoilInjector:
                 continue
             k = get_wheel(cp[3])
             if k is None:
-                self.chassis_contact = True
+                self._chassis_contact = True
                 continue
             px, py, pz = cp[6]
             nx, ny, nz = cp[7]

@@ -129,6 +129,25 @@ class _PatchModel(ABC):
                                                    soil.k_phi, soil.n_exp, soil.deformable)
         return float(gamma), float(exponent)
 
+    # The compiled substep loop's name for the class's force law (`kernel_constants`).
+    _COMPILED_KIND: int | None = None
+
+    def kernel_constants(self, soil: SoilParams) -> tuple[Any, ...] | None:
+        """The constants `scalar_kernel` binds, flat, for the compiled substep loop.
+
+        ``(kind, A c, tan phi, L/K, kappa, mu, C_x, C_y, A_x, A_y, scaled, gross, C_x raw,
+        W_ref, f_r, gamma, e)``: what ``slipenv/sim/_wheel_loop.c`` evaluates with the same
+        arithmetic as this class's plain float law (tested bit for bit). None for a subclass
+        that changes the law: the compiled loop only knows slipenv's own classes.
+        """
+        if self._COMPILED_KIND is None or type(self) not in _COMPILED_MODELS:
+            return None
+        ac, tan_phi, ratio = self._patch_constants(soil)
+        gamma, exponent = self._compaction(soil)
+        return (self._COMPILED_KIND, ac, tan_phi, ratio, self.lateral_stiffness_ratio,
+                0.0, 0.0, 0.0, 0.0, 0.0, False, False, 0.0, 0.0,
+                self.rolling_resistance_coeff, gamma, exponent)
+
     def scalar_kernel(self, soil: SoilParams) -> Kernel:
         """The per-wheel float function ``(slip, tan_beta, load_n) -> (fx, fy, resistance)``.
 
@@ -211,6 +230,8 @@ class JanosiForceModel(_PatchModel):
         soil, Reina Table 3). Default 1, isotropic: no slipenv soil has a measured value.
     """
 
+    _COMPILED_KIND = 0
+
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
         ac, tan_phi, ratio = self._patch_constants(soil)
         kappa = self.lateral_stiffness_ratio
@@ -237,6 +258,8 @@ class LinearSlipForceModel(_PatchModel):
     No contact (W <= 0), no force. Constructor arguments as in `JanosiForceModel`
     (``lateral_stiffness_ratio`` kappa scales tan_beta the same way).
     """
+
+    _COMPILED_KIND = 1
 
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
         ac, tan_phi, ratio = self._patch_constants(soil)
@@ -296,16 +319,36 @@ class ReinaForceModel(_PatchModel):
         self.scale_stiffness_with_load = bool(scale_stiffness_with_load)
         self.compaction = bool(compaction)
 
-    def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
+    _COMPILED_KIND = 2
+
+    def _reina_constants(self, soil: SoilParams) -> tuple[float, float, float, float, float]:
+        """(mu, C_x, C_y, A_x, A_y) of Eq. 5-9 as the law uses them: with load scaling,
+        C = c W/W_ref makes F proportional to W at a given slip, so the law is W times the law
+        at W = 1 with C/W_ref."""
         mu, c_x, c_y = float(soil.mu), float(soil.c_x_n), float(soil.c_y_n)
-        a_x, a_y = float(soil.a_x), float(soil.a_y)
+        if self.scale_stiffness_with_load:
+            w_ref = float(soil.reference_load_n)
+            c_x, c_y = c_x / w_ref, c_y / w_ref
+        return mu, c_x, c_y, float(soil.a_x), float(soil.a_y)
+
+    def kernel_constants(self, soil: SoilParams) -> tuple[Any, ...] | None:
+        """As `_PatchModel.kernel_constants`, for Reina's law (and its gross thrust)."""
+        if type(self) is not ReinaForceModel:
+            return None
+        mu, c_x, c_y, a_x, a_y = self._reina_constants(soil)
+        scaled = self.scale_stiffness_with_load
+        gamma, exponent = self._compaction(soil)
+        return (self._COMPILED_KIND, 0.0, 0.0, 0.0, 1.0, mu, c_x, c_y, a_x, a_y, scaled,
+                self.compaction, float(soil.c_x_n),
+                float(soil.reference_load_n) if scaled else 0.0,
+                self.rolling_resistance_coeff, gamma, exponent)
+
+    def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
+        mu, c_x, c_y, a_x, a_y = self._reina_constants(soil)
         if not self.scale_stiffness_with_load:
             def verbatim(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
                 return reina_forces(slip, tan_beta, load_n, mu, c_x, c_y, a_x, a_y)
             return verbatim
-        # C = c W/W_ref makes F proportional to W at a given slip: W times the law at W = 1.
-        w_ref = float(soil.reference_load_n)
-        c_x, c_y = c_x / w_ref, c_y / w_ref
 
         def scaled(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
             fx, fy = reina_forces(slip, tan_beta, 1.0, mu, c_x, c_y, a_x, a_y)
@@ -340,6 +383,9 @@ class ReinaForceModel(_PatchModel):
                 f"scale_stiffness_with_load={self.scale_stiffness_with_load!r}, "
                 f"compaction={self.compaction!r})")
 
+
+# The classes whose laws the compiled loop transcribes (a subclass may change the law).
+_COMPILED_MODELS = (JanosiForceModel, LinearSlipForceModel)
 
 FORCE_MODELS: Mapping[str, Callable[..., ForceModel]] = MappingProxyType({
     "janosi": JanosiForceModel,
