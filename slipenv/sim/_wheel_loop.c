@@ -721,25 +721,6 @@ static PyObject *loop_apply(WheelLoop *self, PyObject *unused)
     Py_RETURN_NONE;
 }
 
-/* run(substeps, step_simulation): apply + stepSimulation(client) substeps times. */
-static PyObject *loop_run(WheelLoop *self, PyObject *args)
-{
-    int substeps;
-    PyObject *step_fn;
-    if (!PyArg_ParseTuple(args, "iO", &substeps, &step_fn))
-        return NULL;
-    PyObject *cargs[1] = {self->client_obj};
-    for (int i = 0; i < substeps; i++) {
-        if (loop_step(self) < 0)
-            return NULL;
-        PyObject *r = PyObject_Vectorcall(step_fn, cargs, 1, NULL);
-        if (r == NULL)
-            return NULL;
-        Py_DECREF(r);
-    }
-    Py_RETURN_NONE;
-}
-
 /* -- reading and writing the per-wheel state ---------------------------------------------- */
 
 #define FIELD_LIST(NAME, EXPR)                                                    \
@@ -808,8 +789,6 @@ static PyMethodDef loop_methods[] = {
     {"reset", (PyCFunction)loop_reset, METH_NOARGS, "Zero every wheel's state."},
     {"apply", (PyCFunction)loop_apply, METH_NOARGS,
      "One substep's forces: query PyBullet, compute, apply."},
-    {"run", (PyCFunction)loop_run, METH_VARARGS,
-     "run(substeps, stepSimulation): apply, then step, substeps times."},
     {NULL, NULL, 0, NULL},
 };
 

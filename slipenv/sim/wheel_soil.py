@@ -38,6 +38,7 @@ import numpy as np
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.compiled import wheel_loop_module
 from slipenv.terramechanics.bekker import rut_following_compaction_n
+from slipenv.terramechanics.contact import ContactGeometry
 from slipenv.terramechanics.models import ForceModel, wheel_kernel
 from slipenv.terramechanics.slip_dynamics import (
     contact_relaxation_length_m,
@@ -129,6 +130,10 @@ class WheelSoilInjector:
         If True, a wheel running in the rut of the wheel ahead of it (same side, its contact
         within half a width of that wheel's line) meets only the compaction of the soil below
         that rut (`bekker.multi_pass_compaction_n`). Default False.
+    castor_own_geometry : bool
+        If True, a castor's motion resistance is the Bekker compaction of its own wheel (its
+        radius, width and contact length; `ForceModel.with_geometry`), not of the driven
+        wheels' geometry the force model was built for.
     compiled : bool or None
         Run the substep loop compiled (``slipenv/sim/_wheel_loop.c``, a transcription of this
         class's Python loop, tested bit for bit against it): None (default) when it was built
@@ -153,6 +158,7 @@ class WheelSoilInjector:
         damping_speed_mps: float = 0.2,
         multi_pass: bool = False,
         compiled: bool | None = None,
+        castor_own_geometry: bool = False,
     ) -> None:
         for key, value in (("dt_s", dt_s), ("min_relaxation_m", min_relaxation_m),
                            ("resistance_stick_m", resistance_stick_m),
@@ -188,6 +194,7 @@ class WheelSoilInjector:
         self.multi_pass = bool(multi_pass)
         self._f_r = float(getattr(force_model, "rolling_resistance_coeff", 0.0))
         self.leaders = _rut_leaders(spec) if self.multi_pass else [(-1, -1)] * self.n
+        self._models = _wheel_models(spec, force_model, castor_own_geometry)
         self._loop = self._compiled_loop(compiled)
         if self._loop is not None:
             # The substep is the C loop itself: no Python frame per substep.
@@ -285,11 +292,11 @@ class WheelSoilInjector:
         self._sigma = [self._relaxation_m(sp, k) for k, sp in enumerate(rows)]
         self._h = [self.dt_s / sigma for sigma in self._sigma]
         self._r_eff = [self._rolling_radius_m(sp, k) for k, sp in enumerate(rows)]
-        kernels = {}
-        for sp in rows:
-            if id(sp) not in kernels:
-                kernels[id(sp)] = wheel_kernel(self.force_model, sp)
-        self._kernels = [kernels[id(sp)] for sp in rows]
+        kernels: dict[tuple[int, int], Any] = {}
+        for model, sp in zip(self._models, rows, strict=True):
+            if (id(model), id(sp)) not in kernels:
+                kernels[id(model), id(sp)] = wheel_kernel(model, sp)
+        self._kernels = [kernels[id(m), id(sp)] for m, sp in zip(self._models, rows, strict=True)]
         self._damping = [self._soil_damping(k) for k in range(self.n)]
         self._rut_damping = [self._resistance_damping(k) for k in range(self.n)]
         # What `apply` reads per wheel, in one tuple (one unpacking instead of ten lookups).
@@ -297,15 +304,15 @@ class WheelSoilInjector:
             (k, self.links[k], self.driven[k], self.spin_index[k], self._r_eff[k], self._h[k],
              self._kernels[k], *self._damping[k], self._rut_damping[k]) for k in range(self.n)]
         if self._loop is not None:
-            constants = {}
-            for sp in rows:
-                if id(sp) not in constants:
-                    constants[id(sp)] = self.force_model.kernel_constants(sp)
+            constants: dict[tuple[int, int], Any] = {}
+            for model, sp in zip(self._models, rows, strict=True):
+                if (id(model), id(sp)) not in constants:
+                    constants[id(model), id(sp)] = model.kernel_constants(sp)
             set_wheel = self._loop.set_wheel
-            for k, sp in enumerate(rows):
+            for k, (model, sp) in enumerate(zip(self._models, rows, strict=True)):
                 set_wheel(k, self.driven[k], self.spin_index[k], self._r_eff[k], self._h[k],
                           *self._damping[k], self._rut_damping[k], *self.leaders[k],
-                          constants[id(sp)])
+                          constants[id(model), id(sp)])
 
     def soil_at_wheel(self, k: int) -> SoilParams:
         """The soil (floats) under wheel ``k`` at the last `sample_soil` (read-only)."""
@@ -554,6 +561,25 @@ def _wheel_sinkage_m(load_n: float, width_m: float, diameter_m: float,
         return 0.0
     base = 3.0 * load_n / ((3.0 - n) * (k_c + width_m * k_phi) * math.sqrt(diameter_m))
     return deformable * base ** (2.0 / (2.0 * n + 1.0))
+
+
+def _wheel_models(spec: VehicleSpec, force_model: ForceModel,
+                  castor_own_geometry: bool) -> list[ForceModel]:
+    """The force model of each wheel: `force_model` itself for the driven wheels; for a castor
+    (``castor_own_geometry``) the same law on the castor's own contact geometry, whose Bekker
+    compaction differs (a narrow, small castor sinks deeper: Wong Ch. 5), when the model can
+    be rebound (`with_geometry`)."""
+    rebind = getattr(force_model, "with_geometry", None)
+    geometry = getattr(force_model, "geometry", None)
+    out: list[ForceModel] = []
+    for w in spec.wheels:
+        if w.role == "driven" or not castor_own_geometry or rebind is None or geometry is None:
+            out.append(force_model)
+            continue
+        own = ContactGeometry(radius_m=w.radius_m, width_m=w.width_m,
+                              contact_length_m=w.contact_length_m)
+        out.append(force_model if own == geometry else rebind(own))
+    return out
 
 
 def _rut_leaders(spec: VehicleSpec) -> list[tuple[int, int]]:

@@ -17,6 +17,7 @@ of arrays (a soil map), is derived from the kernel element by element
 
 from __future__ import annotations
 
+import copy
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
@@ -187,6 +188,15 @@ class _PatchModel(ABC):
             Soil under each wheel (floats or arrays of shape (n,)).
         """
         return forces_on_arrays(self.scalar_kernel, 0.0, 0.0, load_n, soil)[2]
+
+    def with_geometry(self, geometry: ContactGeometry) -> _PatchModel:
+        """The same law and options on another contact geometry (e.g. a castor's own wheel,
+        whose Bekker compaction differs from the driven wheels')."""
+        if not isinstance(geometry, ContactGeometry):
+            raise TypeError(f"geometry must be a ContactGeometry, got {type(geometry).__name__}")
+        model = copy.copy(self)
+        model.geometry = geometry
+        return model
 
     def scalar(self, slip: float, tan_beta: float, load_n: float,
                soil: SoilParams) -> tuple[float, float, float]:

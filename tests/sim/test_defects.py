@@ -142,3 +142,34 @@ def test_the_env_info_reports_the_damper_share_per_wheel():
         assert np.all(np.isfinite(damper)) and np.all(damper >= 0.0)
     finally:
         env.close()
+
+
+def test_farm_castor_resistance_is_the_bekker_compaction_of_its_own_wheel(make_sim):
+    """A castor cuts its own rut: its resistance is f_r W + gamma W^e with gamma, e of its own
+    width and diameter (Bekker via Wong Ch. 5, `bekker.wheel_compaction_law`), not of the
+    driven wheels' (0.12 m x 0.30 m castor against 0.25 m x 0.55 m: it sinks deeper per
+    newton, about twice the drag at the farm vehicle's load)."""
+    from slipenv.sim.wheel_soil import WheelSoilInjector
+    from slipenv.terramechanics.bekker import wheel_compaction_law
+
+    sim = make_sim("farm_2wd", "field_loam", "linear")
+    sim.reset(0.0, 0.0, 0.0)
+    sim.injector = WheelSoilInjector(sim.client, sim.spec, sim.body, sim.terrain.body_id,
+                                     sim.force_model, sim.injector.soil_map, sim.dt_s,
+                                     castor_own_geometry=True)
+    drive(sim, 0.5, 0.0, 4.0)
+    state = sim.injector.contact_state()
+    soil = sim.injector.soil_at_wheel(0)
+    f_r = sim.force_model.rolling_resistance_coeff
+    driven = next(w for w in sim.spec.wheels if w.role == "driven")
+    for k, wheel in enumerate(sim.spec.wheels):
+        if wheel.role != "caster":
+            continue
+        load = state.load_n[k]
+        gamma, e = wheel_compaction_law(wheel.width_m, 2 * wheel.radius_m, soil.k_c, soil.k_phi,
+                                        soil.n_exp, soil.deformable)
+        own = f_r * load + float(gamma) * load ** float(e)
+        gamma_d, e_d = wheel_compaction_law(driven.width_m, 2 * driven.radius_m, soil.k_c,
+                                            soil.k_phi, soil.n_exp, soil.deformable)
+        assert state.resistance_n[k] == pytest.approx(own, rel=1e-9)  # sliding: full R
+        assert own > 1.5 * (f_r * load + float(gamma_d) * load ** float(e_d))
