@@ -7,10 +7,12 @@ given and the frames it produced -- and then, with PyBullet out of the loop, rep
 * the sensor suite over the recorded truths (``SensorSuite.measure``, beacons included);
 * every estimator over the recorded frames (``reset`` once, then ``update`` per frame):
   dead reckoning, gyrodometry, Endo's skid-steer odometry, Reina's compass odometry and the
-  Lindgren EKF in schemes 1-4.
+  Lindgren EKF in schemes 1-4, on its compiled kernel (``_ekf.c``, when built) and, as
+  ``lindgren_ekf_s*_numpy``, on the numpy reference (``SLIPENV_LINDGREN_NUMPY=1``).
 
 Each cost is the median over ``--repeats`` passes of (time for the whole pass) / (frames), in
-microseconds per control step; passes of different estimators are interleaved so that load from
+microseconds per control step, and next to it the fastest pass (on a loaded machine, the closer
+to the cost on a quiet one); passes of different estimators are interleaved so that load from
 other processes hits all alike. Run from the repository root::
 
     python benchmarks/estimator_cost.py [--steps 300] [--repeats 7] [--json PATH]
@@ -20,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import time
 from collections.abc import Callable
@@ -29,6 +32,7 @@ import numpy as np
 
 import slipenv  # noqa: F401  (registers the envs)
 from slipenv.envs.estimation import make_estimator, odometry_geometry
+from slipenv.estimators.lindgren.ekf import FORCE_NUMPY_ENV, compiled_available
 from slipenv.estimators.reina.odometry import CompassOdometry
 from slipenv.sensors.onboard import SensorSuite
 
@@ -77,7 +81,24 @@ def estimator_factories(spec, context) -> dict[str, Callable[[], object]]:
     for scheme in (1, 2, 3, 4):
         f[f"lindgren_ekf_s{scheme}"] = (
             lambda s=scheme: make_estimator("lindgren_ekf", spec, context, scheme=s))
+    if compiled_available():
+        for scheme in (1, 2, 3, 4):
+            f[f"lindgren_ekf_s{scheme}_numpy"] = (
+                lambda s=scheme: _numpy_lindgren(spec, context, s))
     return f
+
+
+def _numpy_lindgren(spec, context, scheme: int) -> object:
+    """The Lindgren EKF on its numpy reference (the kernel is chosen at construction)."""
+    old = os.environ.get(FORCE_NUMPY_ENV)
+    os.environ[FORCE_NUMPY_ENV] = "1"
+    try:
+        return make_estimator("lindgren_ekf", spec, context, scheme=scheme)
+    finally:
+        if old is None:
+            del os.environ[FORCE_NUMPY_ENV]
+        else:
+            os.environ[FORCE_NUMPY_ENV] = old
 
 
 def time_estimator(make: Callable[[], object], frames, pose0) -> float:
@@ -112,7 +133,9 @@ def run(steps: int = 300, repeats: int = 7) -> dict:
     return {
         "env": ENV_ID, "frames": len(frames) - 1, "repeats": repeats,
         "bearings_per_step": round(n_bearings / (len(frames) - 1), 2),
+        "lindgren_compiled": compiled_available(),
         "us_per_step": {k: round(1e6 * statistics.median(v), 1) for k, v in samples.items()},
+        "us_per_step_min": {k: round(1e6 * min(v), 1) for k, v in samples.items()},
     }
 
 
@@ -124,10 +147,11 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     result = run(args.steps, args.repeats)
     print(f"{result['env']}: {result['frames']} control steps, "
-          f"{result['bearings_per_step']} bearings per step, median of {result['repeats']}")
-    print(f"{'component':<26} {'us / control step':>18}")
+          f"{result['bearings_per_step']} bearings per step, median of {result['repeats']}; "
+          f"Lindgren kernel: {'compiled' if result['lindgren_compiled'] else 'numpy'}")
+    print(f"{'component':<26} {'us / control step':>18} {'fastest pass':>13}")
     for name, us in result["us_per_step"].items():
-        print(f"{name:<26} {us:>18.1f}")
+        print(f"{name:<26} {us:>18.1f} {result['us_per_step_min'][name]:>13.1f}")
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(result, fh, indent=2)

@@ -33,8 +33,9 @@ Three more figures per env (issue 15):
   substep and ``sample_soil`` once per step), ``truth`` (the simulator's state queries),
   ``sensors``, ``estimator``, ``observation_reward`` (observation, path projection and info),
   ``rest`` (the step's own Python: action check, motor commands, reward terms, rollout loop)
-  and ``total``, in microseconds per control step. The timers add ~0.3 µs per call, so this
-  rollout is not the one the ratio is taken from.
+  and ``total``, in microseconds per control step; times are exclusive (a timed call inside
+  another, the path projection inside the observation, is counted once). The timers add
+  ~0.3 µs per call, so this rollout is not the one the ratio is taken from.
 * ``vec_env_steps_per_s``: total env steps/s of ``gymnasium.make_vec(id, VEC_PROCESSES,
   vectorization_mode="async")`` (one env per process, constant action, after a warm-up).
 """
@@ -204,20 +205,30 @@ def coulomb_steps_per_s(client: int, steps: int, substeps: int) -> float:
 
 # -- where a step's time goes -------------------------------------------------------------------
 class _Timers:
-    """Accumulated seconds per component, and wrappers that add to them."""
+    """Accumulated seconds per component, and wrappers that add to them.
+
+    Times are exclusive: a timed call made inside another (the path projection inside
+    ``_observe``) counts for its own key only, and the outer call gets its time minus the inner
+    one, so no time is counted twice and ``rest`` (the remainder) is not understated.
+    """
 
     def __init__(self) -> None:
         self.seconds = dict.fromkeys(BREAKDOWN_KEYS, 0.0)
+        self._inner: list[float] = []  # per open timed call: time spent in timed calls inside
 
     def wrap(self, fn, key: str):
-        seconds, clock = self.seconds, time.perf_counter
+        seconds, clock, inner = self.seconds, time.perf_counter, self._inner
 
         def timed(*args, **kwargs):
+            inner.append(0.0)
             t0 = clock()
             try:
                 return fn(*args, **kwargs)
             finally:
-                seconds[key] += clock() - t0
+                elapsed = clock() - t0
+                seconds[key] += elapsed - inner.pop()
+                if inner:
+                    inner[-1] += elapsed
 
         return timed
 

@@ -256,11 +256,13 @@ def add_reproduce(sub: SubParsers) -> argparse.ArgumentParser:
                    help="write the page DIR/NAME.md (yamauchi in another world: "
                         "DIR/yamauchi_<world>.md)")
     p.add_argument("--vehicle", type=tracked_vehicle_name, default=None,
-                   help="yamauchi: run on this tracked vehicle preset "
-                        "(tracked_patako_wong_chiang: the Wong-Chiang track model; "
-                        "None: the env's tracked_patako)")
+                   help="yamauchi: run on this tracked vehicle preset (default "
+                        "tracked_patako_wong_chiang: the Wong-Chiang track model; "
+                        "tracked_patako: the env's per-wheel law)")
     p.add_argument("--soil", type=soil_name, default=None,
-                   help="yamauchi: run on this soil preset (None: the env's toyoura_sand)")
+                   help="yamauchi: run on this soil preset (default dry_sand; toyoura_sand: "
+                        "the env's; --vehicle tracked_patako --soil toyoura_sand is the env's "
+                        "world, the one --save-model needs)")
     return p
 
 
@@ -270,12 +272,19 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         raise ValueError(f"{' and '.join('--' + k for k in world)} only "
                          f"appl{'y' if len(world) > 1 else 'ies'} to "
                          f"{', '.join(WORLD_EXPERIMENTS)}, not {args.name}")
-    if world and args.save_model:
-        from slipenv.experiments.yamauchi.settings import page_name
+    if args.save_model and args.name == "yamauchi":
+        from slipenv.experiments.yamauchi.settings import (
+            REPRODUCTION_SOIL,
+            REPRODUCTION_VEHICLE,
+            is_env_world,
+        )
 
-        if page_name(args.vehicle, args.soil) != "yamauchi":
+        vehicle = args.vehicle if args.vehicle is not None else REPRODUCTION_VEHICLE
+        soil = args.soil if args.soil is not None else REPRODUCTION_SOIL
+        if not is_env_world(vehicle, soil):
             raise ValueError("--save-model writes the model the env observes with, fitted in "
-                             "the env's own world: not with another --vehicle/--soil")
+                             "the env's own world: add --vehicle tracked_patako --soil "
+                             f"toyoura_sand (this run's world: {vehicle} on {soil})")
     out_dir = writable_dir(_fill(args.out, name=args.name), "--out")
     json_path = writable_file(args.json, "--json")
     docs_dir = None if args.docs is None else str(writable_dir(args.docs, "--docs"))
@@ -284,9 +293,9 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     run = experiment(args.name)
     extra: dict[str, Any] = {"save_model": args.save_model} if args.save_model else {}
     if world:
-        from slipenv.experiments.yamauchi import QUICK, Settings
+        from slipenv.experiments.yamauchi import FULL, QUICK
 
-        extra["settings"] = dataclasses.replace(QUICK if args.quick else Settings(), **world)
+        extra["settings"] = dataclasses.replace(QUICK if args.quick else FULL, **world)
     result = run(quick=args.quick, out_dir=str(out_dir),
                  json_path=None if json_path is None else str(json_path), seed=args.seed,
                  progress=not args.quiet, docs_dir=docs_dir, **extra)

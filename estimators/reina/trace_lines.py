@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from slipenv.contracts.camera import PinholeCamera
@@ -127,10 +128,17 @@ def refine_angle(edges: np.ndarray, camera: PinholeCamera, ground_z_m: float,
     rather than along the Hough segment only. Falls back to ``angle_rad`` when too few pixels
     support the fit.
     """
-    rows, cols = np.nonzero(edges)
-    if len(rows) < 10:
+    # (column, row) of every edge pixel in row-major order, as np.nonzero gives them;
+    # OpenCV's scan is about three times faster on a uint8 edge map (issue 15)
+    if edges.dtype == np.uint8 and edges.ndim == 2:
+        found = cv2.findNonZero(edges)
+        uv = np.zeros((0, 2)) if found is None else found.reshape(-1, 2).astype(float)
+    else:
+        rows, cols = np.nonzero(edges)
+        uv = np.column_stack([cols, rows]).astype(float)
+    if len(uv) < 10:
         return angle_rad
-    pts = camera.image_to_ground(np.column_stack([cols, rows]).astype(float), ground_z_m)
+    pts = camera.image_to_ground(uv, ground_z_m)
     lines = np.array(edge_lines, dtype=float).reshape(-1, 3)
     angle = angle_rad
     for _ in range(iterations):

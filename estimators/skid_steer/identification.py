@@ -104,6 +104,18 @@ class SlipAngleModel:
 
         Each regressor is first clipped into ``feature_range`` (when set).
         """
+        if type(roll) is float and type(angular_displacement) is float \
+                and type(rotation_radius) is float:
+            # One sample per odometry step: the same IEEE operations on plain floats, without
+            # numpy's per-call cost on 0-d arrays (issue 15); bit-identical to the array path.
+            regressors = [roll, angular_displacement, rotation_radius]
+            if self.feature_range is not None:
+                regressors = [min(max(x, lo), hi)
+                              for x, (lo, hi) in zip(regressors, self.feature_range, strict=True)]
+            value = float(self.coef[0])
+            for a, x in zip(self.coef[1:], regressors, strict=True):
+                value = value + float(a) * x
+            return np.asarray(value)
         xs = [np.asarray(x, dtype=float) for x in (roll, angular_displacement, rotation_radius)]
         if self.feature_range is not None:
             xs = [np.clip(x, lo, hi) for x, (lo, hi) in zip(xs, self.feature_range, strict=True)]

@@ -38,6 +38,24 @@ class SlipEnvConfig:
     force_model : str | ForceModel | callable
         ``"reina"``, ``"janosi"``, ``"linear"``, a model instance, or a callable taking the
         wheel's ``ContactGeometry`` and returning a model.
+    force_model_kwargs : dict
+        Options of the force model named by ``force_model`` (its constructor's keyword
+        arguments), e.g. ``{"lateral_stiffness_ratio": 3.6}`` for ``janosi`` or ``linear``:
+        the soil's lateral small-slip stiffness over its longitudinal one (Reina measured
+        C_y/C_x = 3.6 on loose soil, Reina Table 3; Reina's own law has its C_y and takes no
+        ratio), or ``rolling_resistance_coeff``. Default ``{}``: the model's defaults
+        (isotropic, kappa = 1). Only with a force model given by name.
+    multi_pass : bool
+        A wheel running in the rut of the wheel ahead of it meets only the compaction of the
+        soil below that rut (Wong §2.4, repetitive loading; ``WheelSoilInjector``'s
+        ``multi_pass``). Default ``False`` (every wheel cuts its own rut). Per-wheel soil law
+        only: a Wong-Chiang track (``tracked_patako_wong_chiang``) has its own rut state.
+    castor_own_geometry : bool
+        Castors (non-driven wheels) meet the Bekker compaction of their own wheel (radius,
+        width, contact length; ``WheelSoilInjector``'s ``castor_own_geometry``) instead of the
+        driven wheels' the force model was built for. Default ``False``: the farm vehicle's
+        castors are an assumption (Lindgren gives none), and at their assumed size (0.30 m x
+        0.12 m, ~1200 N each) on field loam they would meet ~300 N each, twice the default.
     path : str | Path
         Path name (``slipenv.paths.path_by_name``) or a built ``Path``.
     path_kwargs : dict
@@ -88,6 +106,9 @@ class SlipEnvConfig:
     soil: Any = "loose_sand"
     soil_map: Any = None
     force_model: Any = "reina"
+    force_model_kwargs: dict = field(default_factory=dict)
+    multi_pass: bool = False
+    castor_own_geometry: bool = False
     path: Any = "circle"
     path_kwargs: dict = field(default_factory=dict)
     estimator: str = "dead_reckoning"
@@ -116,6 +137,17 @@ class SlipEnvConfig:
         elif not (hasattr(self.force_model, "resistance_n") or callable(self.force_model)):
             raise ValueError("force_model must be a name, a ForceModel or a factory, got "
                              f"{self.force_model!r}")
+        _check_force_model_kwargs(self.force_model, self.force_model_kwargs)
+        if not isinstance(self.multi_pass, bool):
+            raise ValueError(f"multi_pass must be True or False, got {self.multi_pass!r}")
+        if self.multi_pass and _track_model(self.vehicle) is not None:
+            raise ValueError(
+                f"multi_pass applies to the per-wheel soil law; vehicle {_name(self.vehicle)!r} "
+                f"uses the {_track_model(self.vehicle)!r} track model, whose rut state already "
+                "lets the rear of the track run in the rut the front cut")
+        if not isinstance(self.castor_own_geometry, bool):
+            raise ValueError("castor_own_geometry must be True or False, got "
+                             f"{self.castor_own_geometry!r}")
         _check_choice("path", self.path, _path_names(), _path_type())
         _check_options("path_kwargs", self.path_kwargs)
         if isinstance(self.path, str):
@@ -170,9 +202,10 @@ class SlipEnvConfig:
             for key in ("reward_weights",):
                 if isinstance(merged.get(key), dict) and isinstance(getattr(base, key), dict):
                     merged[key] = {**getattr(base, key), **merged[key]}
-            # A preset's options belong to its path and estimator: choosing another one by
-            # name starts from that one's own defaults.
-            for choice, options in (("path", "path_kwargs"), ("estimator", "estimator_kwargs")):
+            # A preset's options belong to its path, estimator and force model: choosing
+            # another one by name starts from that one's own defaults.
+            for choice, options in (("path", "path_kwargs"), ("estimator", "estimator_kwargs"),
+                                    ("force_model", "force_model_kwargs")):
                 if (choice in merged and options not in merged
                         and merged[choice] != getattr(base, choice)):
                     merged[options] = {}
@@ -238,6 +271,59 @@ def _named(owner: str, cls, **values):
         return cls(**values)
     except ValueError as exc:
         raise ValueError(f"{owner}: {exc}") from None
+
+
+def _check_force_model_kwargs(force_model: Any, kwargs: Any) -> None:
+    """``kwargs`` must be options of the named force model's class, numbers where its default
+    is a number, flags where it is a flag, and build the model (its range checks)."""
+    _check_options("force_model_kwargs", kwargs)
+    if not kwargs:
+        return
+    if not isinstance(force_model, str):
+        raise ValueError("force_model_kwargs apply to a force model given by name; with a "
+                         f"model instance or factory pass its options to it (got "
+                         f"force_model={force_model!r}, force_model_kwargs={kwargs!r})")
+    cls = _force_model_names()[force_model]
+    params = {k: v for k, v in inspect.signature(cls).parameters.items() if k != "geometry"}
+    try:
+        _check_names(f"force_model_kwargs of force model {force_model!r}", kwargs, params)
+    except ValueError as exc:
+        extra = (" (Reina's law has its own lateral stiffness C_y; use force_model='janosi' "
+                 "or 'linear' for a lateral_stiffness_ratio)"
+                 if "lateral_stiffness_ratio" in kwargs and "lateral_stiffness_ratio" not in params
+                 else "")
+        raise ValueError(f"{exc}{extra}") from None
+    for key, value in kwargs.items():
+        default = params[key].default
+        if isinstance(default, bool):
+            if not isinstance(value, bool):
+                raise ValueError(f"force_model_kwargs[{key!r}] must be True or False, "
+                                 f"got {value!r}")
+        elif _is_number(default) and not (_is_number(value) and math.isfinite(value)):
+            raise ValueError(f"force_model_kwargs[{key!r}] must be a finite number, "
+                             f"got {value!r}")
+    try:
+        cls(_nominal_geometry(), **kwargs)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"force_model_kwargs: {exc}") from None
+
+
+def _nominal_geometry():
+    """A wheel's contact geometry for checking a force model's options (any valid one)."""
+    from slipenv.terramechanics.contact import ContactGeometry
+
+    return ContactGeometry(radius_m=0.1, width_m=0.1, contact_length_m=0.05)
+
+
+def _name(value: Any) -> str:
+    return value if isinstance(value, str) else getattr(value, "name", repr(value))
+
+
+def _track_model(vehicle: Any) -> str | None:
+    """The vehicle's track model (``None``: the per-wheel law)."""
+    spec = _vehicle_names()[vehicle]() if isinstance(vehicle, str) else vehicle
+    model = getattr(spec, "track_model", "per_wheel")
+    return None if model == "per_wheel" else model
 
 
 def _terrain(value: Any) -> TerrainSpec:

@@ -48,11 +48,18 @@ def contact_geometry(spec: VehicleSpec) -> ContactGeometry:
     )
 
 
-def make_force_model(force_model: Any, spec: VehicleSpec):
-    """A force model from a name, an instance, or a factory taking a ContactGeometry."""
+def make_force_model(force_model: Any, spec: VehicleSpec, options: dict | None = None):
+    """A force model from a name (built with ``options``, the config's
+    ``force_model_kwargs``), an instance, or a factory taking a ContactGeometry."""
     geometry = contact_geometry(spec)
     if isinstance(force_model, str):
-        return force_model_by_name(force_model, geometry)
+        try:
+            return force_model_by_name(force_model, geometry, **(options or {}))
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"force_model_kwargs: {exc}") from None
+    if options:
+        raise ValueError("force_model_kwargs apply to a force model given by name, got "
+                         f"{force_model!r}")
     if hasattr(force_model, "resistance_n") and not isinstance(force_model, type):
         return force_model
     if callable(force_model):

@@ -34,7 +34,8 @@ import gymnasium as gym
 from slipenv.envs.config import SlipEnvConfig
 
 ENTRY_POINT = "slipenv.envs.slip_env:SlipEnv"
-# Fitted by ``slipenv reproduce yamauchi --save-model PATH``; version-controlled package data.
+# Fitted by ``slipenv reproduce yamauchi --vehicle tracked_patako --soil toyoura_sand
+# --save-model PATH`` (the env preset's world); version-controlled package data.
 YAMAUCHI_MODEL = "yamauchi_slip_model.json"
 
 
@@ -62,7 +63,8 @@ def yamauchi_observation() -> dict:
             f"slipenv/data/{YAMAUCHI_MODEL} is missing from the installed package ({model}); "
             "it is package data (pyproject.toml [tool.setuptools.package-data]): reinstall "
             "slipenv, or regenerate it in a source checkout with `slipenv reproduce yamauchi "
-            f"--save-model slipenv/data/{YAMAUCHI_MODEL}`")
+            f"--vehicle tracked_patako --soil toyoura_sand --save-model "
+            f"slipenv/data/{YAMAUCHI_MODEL}`")
     saved = json.loads(model.read_text())
     for key in ("beta_model", "n"):
         if key not in saved:

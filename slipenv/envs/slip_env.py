@@ -132,11 +132,12 @@ class SlipEnv(gym.Env):
         self._vehicle = make_vehicle(cfg.vehicle)
         self._path = self._make_path(cfg)
         soil_map = make_soil_map(cfg.soil, cfg.soil_map)
-        force_model = make_force_model(cfg.force_model, self._vehicle)
+        force_model = make_force_model(cfg.force_model, self._vehicle, cfg.force_model_kwargs)
         beacons = self._make_beacons(cfg)
         self._sim = Simulator(
             self._vehicle, cfg.terrain, force_model, soil_map, physics_hz=cfg.physics_hz,
-            control_hz=cfg.control_hz, gui=render_mode == "human",
+            control_hz=cfg.control_hz, gui=render_mode == "human", multi_pass=cfg.multi_pass,
+            castor_own_geometry=cfg.castor_own_geometry,
         )
         self._dt_s = self._sim.control_dt_s
         self.max_steps = int(math.ceil(cfg.max_episode_s / self._dt_s))
@@ -393,7 +394,7 @@ class SlipEnv(gym.Env):
             "wheel_slip": contact.slip,
             "wheel_slip_angle_rad": np.arctan(contact.tan_beta),
             "wheel_load_n": contact.load_n,
-            "wheel_force_n": np.stack([contact.fx_n, contact.fy_n], axis=1),
+            "wheel_force_n": np.column_stack((contact.fx_n, contact.fy_n)),
             "wheel_resistance_n": contact.resistance_n,
             "wheel_damper_n": contact.damper_n,
             "estimated_pose": np.array([estimate.x_m, estimate.y_m, estimate.yaw_rad]),

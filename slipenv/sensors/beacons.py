@@ -148,6 +148,9 @@ class BeaconScanner:
         self.clutter_rate_hz = float(clutter_rate_hz)
         self.head_phase_rad = float(head_phase_rad)
         self._last: tuple[float, float, float, float] | None = None  # (t, x, y, yaw)
+        # (x, y, beacons, world bearing of each beacon from there) at the last pose: the next
+        # scan starts from that pose, so its bearings need not be computed twice (issue 15)
+        self._last_bearings: tuple[float, float, np.ndarray, np.ndarray] | None = None
 
     def reset(self, t_s: float | None = None, x_m: float = 0.0, y_m: float = 0.0,
               yaw_rad: float = 0.0) -> None:
@@ -162,7 +165,17 @@ class BeaconScanner:
 
     def _body_bearings(self, x: float, y: float, yaw: float) -> np.ndarray:
         """Unwrapped bearing of each beacon from pose (x, y, yaw) [rad], shape (m,)."""
-        return np.arctan2(self.beacons_xy[:, 1] - y, self.beacons_xy[:, 0] - x) - yaw
+        return self._world_bearings(x, y) - yaw
+
+    def _world_bearings(self, x: float, y: float) -> np.ndarray:
+        """Bearing of each beacon from (x, y), counter-clockwise from world x [rad], shape (m,);
+        reuses the last pose's (the same floats give the same bearings)."""
+        last = self._last_bearings
+        if last is not None and last[0] == x and last[1] == y and last[2] is self.beacons_xy:
+            return last[3]
+        bearings = np.arctan2(self.beacons_xy[:, 1] - y, self.beacons_xy[:, 0] - x)
+        self._last_bearings = (x, y, self.beacons_xy, bearings)
+        return bearings
 
     def scan(
         self, t_s: float, x_m: float, y_m: float, yaw_rad: float, rng: np.random.Generator
@@ -205,10 +218,16 @@ class BeaconScanner:
         m_lo = np.floor(g0 / (2.0 * np.pi)) + 1.0
         m_hi = np.floor((g0 + dg) / (2.0 * np.pi))
         n_hits = np.maximum(m_hi - m_lo + 1.0, 0.0).astype(int) * (dg > 0.0)
-        idx = np.repeat(np.arange(len(self.beacons_xy)), n_hits)
-        m = m_lo[idx] + (np.arange(len(idx)) - np.repeat(np.cumsum(n_hits) - n_hits, n_hits))
-        frac = np.clip((2.0 * np.pi * m - g0[idx]) / dg[idx], 0.0, 1.0)
-        times = np.maximum(t0 + frac * dt, np.nextafter(t0, math.inf))  # stay inside (t0, t1]
+        if self.clutter_rate_hz == 0.0 and not n_hits.any():
+            return np.zeros(0), np.zeros(0)  # the head swept past no beacon: nothing to draw
+        if n_hits.max() == 1:  # the usual case: each beacon swept past at most once
+            idx = np.flatnonzero(n_hits)
+            m = m_lo[idx]
+        else:
+            idx = np.repeat(np.arange(len(self.beacons_xy)), n_hits)
+            m = m_lo[idx] + (np.arange(len(idx)) - np.repeat(np.cumsum(n_hits) - n_hits, n_hits))
+        frac = np.minimum(np.maximum((2.0 * np.pi * m - g0[idx]) / dg[idx], 0.0), 1.0)
+        times = np.maximum(t0 + frac * dt, math.nextafter(t0, math.inf))  # stay inside (t0, t1]
         xs, ys = x0 + frac * (x_m - x0), y0 + frac * (y_m - y0)
         yaws = yaw0 + frac * dyaw
         dx, dy = self.beacons_xy[idx, 0] - xs, self.beacons_xy[idx, 1] - ys
@@ -220,6 +239,7 @@ class BeaconScanner:
             k = rng.poisson(self.clutter_rate_hz * dt)
             bearing = np.concatenate([bearing, rng.uniform(-0.5, 0.5, k) * self.fov_rad])
             times = np.concatenate([times, t0 + dt * (1.0 - rng.uniform(0.0, 1.0, k))])
-        order = np.argsort(times, kind="stable")
-        bearing = wrap_angles(bearing[order])
-        return bearing, times[order]
+        if len(times) > 1:
+            order = np.argsort(times, kind="stable")
+            bearing, times = bearing[order], times[order]
+        return wrap_angles(bearing), times

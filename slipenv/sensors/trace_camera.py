@@ -24,7 +24,13 @@ from numpy.typing import ArrayLike
 
 from slipenv.contracts.camera import PinholeCamera, downward_camera, rotation_rpy
 from slipenv.sensors.trace_history import ContactHistory, WheelTrack
-from slipenv.sensors.trace_raster import fbm_noise, polyline_distance_px, rut_height, soft_halfplane
+from slipenv.sensors.trace_raster import (
+    fbm_noise,
+    polyline_distance_px,
+    polyline_distance_window,
+    rut_height,
+    soft_halfplane,
+)
 
 
 @dataclass(frozen=True)
@@ -245,17 +251,25 @@ class TraceCamera:
             if tr.name != cfg.wheel_name:
                 nuisances["second_imprint"] = True
             depth = float(np.mean(tr.depth_m[inside]))
-            dist_px, along_px = polyline_distance_px(uv, (rows, cols))
-            q = dist_px * np.float32(self.m_per_px / (0.5 * tr.width_m))
-            band = q < 1.9  # only the rut and its berms change the ground
-            q_b = q[band]
+            px_per_half_width = np.float32(self.m_per_px / (0.5 * tr.width_m))
+            # Only the rut and its berms (q < 1.9) change the ground: draw on the window of
+            # the image they can reach (1 px of margin against the float32 rounding of q).
+            near = polyline_distance_window(uv, (rows, cols),
+                                            1.9 / float(px_per_half_width) + 1.0)
             phase = rng.uniform(0, 2 * np.pi)
+            if near is None:  # the trace misses the image
+                continue
+            dist_px, along_px, window = near
+            q = dist_px * px_per_half_width
+            band = q < 1.9
+            q_b = q[band]
             grooves = (0.5 + 0.5 * np.cos(along_px[band] * np.float32(
                 2.0 * np.pi * self.m_per_px / cfg.grouser_pitch_m) + np.float32(phase))) ** 8
             rut, in_rut = rut_height(q_b, depth, grooves)
-            old = height[band]
-            height[band] = np.where(in_rut, rut, old + rut)
-            floor[band] |= q_b < 0.85
+            height_w, floor_w = height[window], floor[window]  # views: writes reach the image
+            old = height_w[band]
+            height_w[band] = np.where(in_rut, rut, old + rut)
+            floor_w[band] |= q_b < 0.85
         image = self._shade(height, floor, pose_arr[5], rng, nuisances)
         self._last_t = float(t_s)
         present, angle, offset = self._truth(body)
@@ -281,16 +295,14 @@ class TraceCamera:
                rng: np.random.Generator, nuisances: dict) -> np.ndarray:
         cfg = self.config
         rows, cols = height.shape
-        h_v, h_u = np.gradient(height, np.float32(self.m_per_px))
         az_b = cfg.sun_azimuth_rad - yaw_rad
         s_h = math.cos(cfg.sun_elevation_rad)
         sun_b = s_h * np.array([math.cos(az_b), math.sin(az_b)])
         e_u = self._e_u / np.linalg.norm(self._e_u)
         e_v = self._e_v / np.linalg.norm(self._e_v)
         s_u, s_v, s_z = float(sun_b @ e_u), float(sun_b @ e_v), math.sin(cfg.sun_elevation_rad)
-        s_u, s_v, s_z = np.float32(s_u), np.float32(s_v), np.float32(s_z)
-        lambert = (s_z - h_u * s_u - h_v * s_v) / np.sqrt(1.0 + h_u * h_u + h_v * h_v)
-        light = np.float32(0.35) + np.float32(0.65 / s_z) * np.maximum(lambert, np.float32(0.0))
+        sun = (np.float32(s_u), np.float32(s_v), np.float32(s_z))
+        light = self._sunlight(height, sun)
         albedo = np.float32(0.55) + np.float32(0.10) * fbm_noise((rows, cols), rng) \
             - np.float32(0.08) * floor
         if rng.random() < cfg.p_patch:
@@ -308,6 +320,30 @@ class TraceCamera:
             grey = cv2.GaussianBlur(grey.astype(np.float32), (0, 0), sigma)
         grey = grey + np.float32(cfg.noise_std) * rng.standard_normal((rows, cols), np.float32)
         return np.clip(grey, 0, 255).astype(np.uint8)
+
+    def _sunlight(self, height: np.ndarray, sun: tuple[np.float32, np.float32, np.float32]
+                  ) -> np.ndarray:
+        """Ambient + Lambert light of the height map under the sun (body-image axes u, v, z).
+
+        Flat ground (zero height gradient) gets one value, so only the window around the ruts
+        (the nonzero height, 2 px wider for the gradient's stencil) is computed per pixel; the
+        rest is the same expression evaluated on flat ground, so the image is bit for bit the
+        whole-image computation (issue 15: the camera's cost per frame).
+        """
+        rows, cols = height.shape
+        light = np.full((rows, cols), _lambert_light(np.zeros((1, 1), np.float32),
+                                                     np.zeros((1, 1), np.float32), sun)[0, 0])
+        on_row, on_col = np.flatnonzero(height.any(axis=1)), np.flatnonzero(height.any(axis=0))
+        if len(on_row) == 0:
+            return light
+        # Outside the nonzero height dilated by 1 px the gradient is exactly 0. np.gradient is
+        # central inside the window and one-sided on its border, which is either the image's
+        # own border (one-sided there too) or 2 px from any nonzero height (0 either way).
+        window = (slice(max(int(on_row[0]) - 2, 0), min(int(on_row[-1]) + 3, rows)),
+                  slice(max(int(on_col[0]) - 2, 0), min(int(on_col[-1]) + 3, cols)))
+        h_v, h_u = np.gradient(height[window], np.float32(self.m_per_px))
+        light[window] = _lambert_light(h_u, h_v, sun)
+        return light
 
     # -- truth ------------------------------------------------------------------------------
     def _truth(self, body: list[tuple[WheelTrack, np.ndarray]]) -> tuple[bool, float, float]:
@@ -333,3 +369,12 @@ class TraceCamera:
             offset = mean[1] + (xw - mean[0]) * math.tan(angle) - yw
             return True, angle, float(offset)
         return False, math.nan, math.nan
+
+
+def _lambert_light(h_u: np.ndarray, h_v: np.ndarray,
+                   sun: tuple[np.float32, np.float32, np.float32]) -> np.ndarray:
+    """Light factor (0.35 ambient + 0.65 Lambert, 1 on flat ground in the sun) per pixel from
+    the height gradient [m/m] along the image axes and the sun direction (u, v, z), float32."""
+    s_u, s_v, s_z = sun
+    lambert = (s_z - h_u * s_u - h_v * s_v) / np.sqrt(1.0 + h_u * h_u + h_v * h_v)
+    return np.float32(0.35) + np.float32(0.65 / s_z) * np.maximum(lambert, np.float32(0.0))

@@ -78,14 +78,21 @@ class ContactHistory:
         self.names = tuple(wheel_names)
         self.widths = tuple(float(w) for w in wheel_widths_m)
         self.min_spacing_m, self.max_points = float(min_spacing_m), int(max_points)
-        self._points: list[list[np.ndarray]] = [[] for _ in self.names]
-        self._depth: list[list[float]] = [[] for _ in self.names]
+        # Per wheel, the stored points and depths are rows lo..hi-1 of a buffer twice
+        # ``max_points`` long, compacted to the front when it fills: ``tracks`` (every camera
+        # frame) slices instead of stacking hundreds of small arrays (issue 15).
+        n, capacity = len(self.names), 2 * self.max_points
+        self._points = np.empty((n, capacity, 3))
+        self._depth = np.empty((n, capacity))
+        self._lo, self._hi = [0] * n, [0] * n
+        # each wheel's last stored (x, y), NaN before the first: the spacing test of every
+        # wheel in one vectorised step (append runs at every control step)
+        self._last_xy = np.full((n, 2), np.nan)
 
     def clear(self) -> None:
         """Forget every stored point (new episode)."""
-        for pts, dep in zip(self._points, self._depth, strict=True):
-            pts.clear()
-            dep.clear()
+        self._lo, self._hi = [0] * len(self.names), [0] * len(self.names)
+        self._last_xy[:] = np.nan
 
     def append(self, contact_points_m: ArrayLike, sinkage_m: ArrayLike) -> None:
         """Record one sample: world contact points, shape (n_wheels, 3), and sinkage, (n_wheels,).
@@ -93,29 +100,35 @@ class ContactHistory:
         Rows with a NaN (wheel in the air) are skipped.
         """
         pts = np.asarray(contact_points_m, dtype=float)
-        sink = np.broadcast_to(np.asarray(sinkage_m, dtype=float), (len(self.names),))
+        sink = np.asarray(sinkage_m, dtype=float)
+        if sink.shape != (len(self.names),):
+            sink = np.broadcast_to(sink, (len(self.names),))
         if pts.shape != (len(self.names), 3):
             raise ValueError(f"contact_points_m must have shape ({len(self.names)}, 3), "
                              f"got {pts.shape}")
-        for i in range(len(self.names)):
-            if not np.all(np.isfinite(pts[i])) or not math.isfinite(sink[i]):
-                continue
-            store = self._points[i]
-            if store and np.hypot(*(pts[i, :2] - store[-1][:2])) < self.min_spacing_m:
-                continue
-            store.append(pts[i].copy())
-            self._depth[i].append(max(float(sink[i]), 0.0))
-            if len(store) > self.max_points:
-                del store[0]
-                del self._depth[i][0]
+        finite = np.isfinite(pts).all(axis=1) & np.isfinite(sink)
+        step = pts[:, :2] - self._last_xy
+        # NaN distance (no point stored yet) is not "too close": the first point is stored
+        too_close = np.hypot(step[:, 0], step[:, 1]) < self.min_spacing_m
+        for i in np.flatnonzero(finite & ~too_close):
+            lo, hi = self._lo[i], self._hi[i]
+            if hi == self._points.shape[1]:  # buffer full: move the kept points to the front
+                self._points[i, :hi - lo] = self._points[i, lo:hi]
+                self._depth[i, :hi - lo] = self._depth[i, lo:hi]
+                lo, hi = 0, hi - lo
+            self._points[i, hi] = pts[i]
+            self._depth[i, hi] = max(float(sink[i]), 0.0)
+            hi += 1
+            self._lo[i], self._hi[i] = max(lo, hi - self.max_points), hi
+            self._last_xy[i] = pts[i, :2]
 
     def tracks(self) -> tuple[WheelTrack, ...]:
         """The wheels' traces with at least two points."""
         return tuple(
-            WheelTrack(name, np.array(pts), width, np.array(dep))
-            for name, width, pts, dep in zip(self.names, self.widths, self._points, self._depth,
-                                             strict=True)
-            if len(pts) >= 2
+            WheelTrack(name, self._points[i, lo:hi].copy(), width, self._depth[i, lo:hi])
+            for i, (name, width, lo, hi) in enumerate(zip(self.names, self.widths, self._lo,
+                                                          self._hi, strict=True))
+            if hi - lo >= 2
         )
 
 

@@ -292,6 +292,7 @@ static int parse_kernel(PyObject *spec, Kernel *k)
 typedef struct {
     int link, driven, spin_index;
     int lead_front, lead_back;
+    double rut_ratio_front, rut_ratio_back; /* bekker.rut_load_ratio of each leader's rut */
     double r_eff, h, c_long, d_lat, rut_damping;
     Kernel kernel;
     /* state */
@@ -412,15 +413,20 @@ static int check_wheel(WheelLoop *self, int k)
 }
 
 /* set_wheel(k, driven, spin_index, r_eff, h, c_long, d_lat, rut_damping, lead_front,
-             lead_back, kernel_constants) */
+             lead_back, rut_ratio_front, rut_ratio_back, kernel_constants) */
 static PyObject *loop_set_wheel(WheelLoop *self, PyObject *args)
 {
     int k, driven, spin_index, lead_front, lead_back;
-    double r_eff, h, c_long, d_lat, rut_damping;
+    double r_eff, h, c_long, d_lat, rut_damping, ratio_front, ratio_back;
     PyObject *spec;
-    if (!PyArg_ParseTuple(args, "ipidddddiiO!", &k, &driven, &spin_index, &r_eff, &h, &c_long,
-                          &d_lat, &rut_damping, &lead_front, &lead_back, &PyTuple_Type, &spec))
+    if (!PyArg_ParseTuple(args, "ipidddddiiddO!", &k, &driven, &spin_index, &r_eff, &h,
+                          &c_long, &d_lat, &rut_damping, &lead_front, &lead_back, &ratio_front,
+                          &ratio_back, &PyTuple_Type, &spec))
         return NULL;
+    if ((lead_front >= self->n) || (lead_back >= self->n)) {
+        PyErr_Format(PyExc_IndexError, "leader out of range (n = %d)", self->n);
+        return NULL;
+    }
     if (check_wheel(self, k) < 0)
         return NULL;
     Kernel kern;
@@ -436,6 +442,8 @@ static PyObject *loop_set_wheel(WheelLoop *self, PyObject *args)
     w->rut_damping = rut_damping;
     w->lead_front = lead_front;
     w->lead_back = lead_back;
+    w->rut_ratio_front = ratio_front;
+    w->rut_ratio_back = ratio_back;
     w->kernel = kern;
     Py_RETURN_NONE;
 }
@@ -505,12 +513,14 @@ static int multi_pass(WheelLoop *self, int k, double res, double load_n, double 
                       double *out)
 {
     Wheel *w = &self->w[k];
-    int leader = v_long >= 0.0 ? w->lead_front : w->lead_back;
+    int forward = v_long >= 0.0;
+    int leader = forward ? w->lead_front : w->lead_back;
     if (leader < 0 || self->w[leader].load <= 0.0) {
         *out = res;
         return 0;
     }
-    double f_r = w->kernel.f_r, w_lead = self->w[leader].load, fx, fy, lead;
+    double f_r = w->kernel.f_r, fx, fy, lead;
+    double w_lead = (forward ? w->rut_ratio_front : w->rut_ratio_back) * self->w[leader].load;
     if (kernel_eval(&w->kernel, 0.0, 0.0, w_lead, &fx, &fy, &lead) < 0)
         return -1;
     lead = lead - f_r * w_lead;
@@ -785,7 +795,8 @@ static PyGetSetDef loop_getset[] = {
 static PyMethodDef loop_methods[] = {
     {"set_wheel", (PyCFunction)loop_set_wheel, METH_VARARGS,
      "set_wheel(k, driven, spin_index, r_eff, h, c_long, d_lat, rut_damping, lead_front, "
-     "lead_back, kernel_constants): bind wheel k's constants (once per soil sample)."},
+     "lead_back, rut_ratio_front, rut_ratio_back, kernel_constants): bind wheel k's constants "
+     "(once per soil sample)."},
     {"reset", (PyCFunction)loop_reset, METH_NOARGS, "Zero every wheel's state."},
     {"apply", (PyCFunction)loop_apply, METH_NOARGS,
      "One substep's forces: query PyBullet, compute, apply."},

@@ -93,6 +93,13 @@ class Simulator:
         Open the PyBullet GUI (``render_mode="human"``).
     inject : bool
         Whether to apply the soil forces (``False`` gives the bare world used by the benchmark).
+    multi_pass : bool
+        Per-wheel soil law: a wheel in the rut of the wheel ahead meets only the compaction
+        below that rut (``WheelSoilInjector``'s ``multi_pass``; Wong §2.4). Default False.
+        Refused for a Wong-Chiang track, whose rut state already does this along the track.
+    castor_own_geometry : bool
+        Castors meet the compaction of their own wheel (``WheelSoilInjector``'s
+        ``castor_own_geometry``). Default False.
     """
 
     def __init__(
@@ -105,6 +112,8 @@ class Simulator:
         control_hz: float = 20.0,
         gui: bool = False,
         inject: bool = True,
+        multi_pass: bool = False,
+        castor_own_geometry: bool = False,
     ) -> None:
         ratio = physics_hz / control_hz
         if control_hz <= 0 or physics_hz <= 0 or abs(ratio - round(ratio)) > 1e-9:
@@ -112,6 +121,13 @@ class Simulator:
                 f"physics_hz ({physics_hz}) must be a positive multiple of control_hz "
                 f"({control_hz})"
             )
+        if not isinstance(multi_pass, bool):
+            raise ValueError(f"multi_pass must be True or False, got {multi_pass!r}")
+        if multi_pass and vehicle.track_model == "wong_chiang":
+            raise ValueError(f"multi_pass applies to the per-wheel soil law; vehicle "
+                             f"{vehicle.name!r} uses the Wong-Chiang track model")
+        self.multi_pass = multi_pass
+        self.castor_own_geometry = bool(castor_own_geometry)
         self.spec = vehicle
         self.substeps = int(round(ratio))
         self.dt_s = 1.0 / physics_hz
@@ -151,12 +167,16 @@ class Simulator:
             self.body = build_vehicle(vehicle, self.client, (0, 0, 1.0), (0, 0, 0, 1))
         else:
             self._rewind_body()
-        injector = (TrackSoilInjector if vehicle.track_model == "wong_chiang"
-                    else WheelSoilInjector)
-        self.injector: WheelSoilInjector | TrackSoilInjector = injector(
-            self.client, vehicle, self.body, self.terrain.body_id, self.force_model,
-            self.soil_map, self.dt_s,
-        )
+        self.injector: WheelSoilInjector | TrackSoilInjector
+        if vehicle.track_model == "wong_chiang":
+            self.injector = TrackSoilInjector(
+                self.client, vehicle, self.body, self.terrain.body_id, self.force_model,
+                self.soil_map, self.dt_s)
+        else:
+            self.injector = WheelSoilInjector(
+                self.client, vehicle, self.body, self.terrain.body_id, self.force_model,
+                self.soil_map, self.dt_s, multi_pass=self.multi_pass,
+                castor_own_geometry=self.castor_own_geometry)
         self._channel_joints = [
             [self.body.spin_joints[i] for i, w in enumerate(vehicle.wheels) if w.channel == c]
             for c in vehicle.channels
@@ -249,12 +269,19 @@ class Simulator:
 
     # -- truth ------------------------------------------------------------------------------
     def _channel_angles(self) -> np.ndarray:
+        return self._channel_angles_and_torques()[0]
+
+    def _channel_angles_and_torques(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per channel: the mean spin angle of its joints [rad] and the sum of their motor
+        torques [N m], from one joint-state query."""
         states = p.getJointStates(self.body.body_id, self._all_spin, physicsClientId=self.client)
-        out, i = [], 0
+        angles, torques, i = [], [], 0
         for js in self._channel_joints:
-            out.append(sum(states[i + k][0] for k in range(len(js))) / len(js))
-            i += len(js)
-        return np.array(out)
+            n = len(js)
+            angles.append(sum(states[i + k][0] for k in range(n)) / n)
+            torques.append(sum(states[i + k][3] for k in range(n)))
+            i += n
+        return np.array(angles), np.array(torques)
 
     def truth(self) -> VehicleTruth:
         """Ground truth now (accelerations from the velocity change over the last step)."""
@@ -282,9 +309,7 @@ class Simulator:
         self._prev_vel = v_ref
         specific = to_body((acc[0], acc[1], acc[2] + GRAVITY_MPS2))
         roll, pitch, yaw = p.getEulerFromQuaternion(quat)
-        by_joint = dict(zip(self.injector.spin_joints, self.injector.joint_torques(),
-                            strict=True))
-        channel_torque = [sum(by_joint[j] for j in js) for js in self._channel_joints]
+        angles, channel_torque = self._channel_angles_and_torques()
         return VehicleTruth(
             t_s=self.t_s,
             position_m=position,
@@ -294,7 +319,7 @@ class Simulator:
             velocity_body_mps=v_body,
             yaw_rate_rad_s=yaw_rate,
             specific_force_body_mps2=specific,
-            channel_angle_rad=self._channel_angles() - self._angle_offset,
+            channel_angle_rad=angles - self._angle_offset,
             channel_torque_nm=np.array(channel_torque),
         )
 

@@ -16,9 +16,9 @@ per-wheel shear by one shear field per track:
    lateral forces about the road wheels (exactly what the lumping misses) as one torque per
    track on the hull; the compaction resistance at the track's centre line on the hull.
 
-It exposes the reading interface of ``WheelSoilInjector`` (``contact_state``,
-``joint_torques``, ``reset``, ``sample_soil``, ``soil_at_wheel``, ``rolling_radius_m``) with
-per-road-wheel arrays, each road wheel reporting its track's slip and its share of the forces.
+It exposes the reading interface of ``WheelSoilInjector`` (``contact_state``, ``reset``,
+``sample_soil``, ``soil_at_wheel``, ``rolling_radius_m``) with per-road-wheel arrays, each road
+wheel reporting its track's slip and its share of the forces.
 
 The soil "spring" at rest (j integrates the sliding velocity) gets a Kelvin-Voigt damper on the
 *rate of change of each cell's displacement at fixed hull position*: zero in any steady motion
@@ -196,6 +196,19 @@ class TrackSoilInjector:
         self.r_belt = [float(np.mean([self.radius[k] for k in ks])) for ks in self.tracks]
         self.max_wall_m = (self.params.max_wall_height_m if self.params.max_wall_height_m
                            is not None else 2.0 * max(self.r_belt))
+        # Buffers and constants of the fused hot path (`apply`).
+        self._sign = np.array([1.0, -1.0]).reshape(2, 1, 1)  # (x, y) of Omega z x (.)
+        self._v_cell = np.empty((2, nt, n_cells))
+        self._e_shift = np.zeros((2, nt, n_cells))
+        self._kk = np.empty((2, nt, n_cells))
+        self._out = np.empty((6, nt, n_cells))  # total x, y; shear x, y; wall; |damper|
+        lever_rows = np.zeros((nt, nt * n_cells))
+        track_rows = np.zeros((nt, nt * n_cells))
+        for i in range(nt):
+            lever_rows[i, i * n_cells:(i + 1) * n_cells] = self.lever[i]
+            track_rows[i, i * n_cells:(i + 1) * n_cells] = 1.0
+        self._reduce = np.vstack((self.assign_all, lever_rows, track_rows))
+        self._contact_base = np.array(self.contact_base)
         self.reset()
 
     # -- state ------------------------------------------------------------------------------
@@ -204,8 +217,10 @@ class TrackSoilInjector:
         nt, n_cells = len(self.tracks), self.params.n_cells
         self.j = np.zeros((2, nt, n_cells + 1))  # shear displacement at the cell faces
         self.e = np.zeros((2, nt, n_cells))  # stress-direction state at the cell centres
-        self.wall = np.zeros((2, nt, n_cells))  # left, right wall penetration [m]
-        self.berm = np.zeros((2, nt, n_cells))  # left, right berm cross-section [m^2]
+        # Side-wall penetration and berm in one array (advected together in `apply`).
+        self._wall_berm = np.zeros((2, 2, nt, n_cells))
+        self.wall = self._wall_berm[0]  # left, right wall penetration [m]
+        self.berm = self._wall_berm[1]  # left, right berm cross-section [m^2]
         self.travel = [0.0] * nt
         self.cut_front = [0.0] * nt
         self.cut_rear = [0.0] * nt
@@ -259,6 +274,13 @@ class TrackSoilInjector:
         m_cell = self.mass_kg / len(self.tracks) / self.params.n_cells
         self._two_zeta_sqrt_m = 2.0 * self.params.damping_ratio * math.sqrt(m_cell)
         self._cap = 0.5 * m_cell / self.dt_s
+        # Constants of the fused hot path (`apply`), per track as (nt, 1) columns.
+        self._neg_half_inv_k = -0.5 * self._inv_k
+        self._two_tan_phi = 2.0 * self._tan_phi  # berm height h = sqrt(2 A tan(phi))
+        gamma = self.params.unit_weight_n_m3
+        self._p_quad = 0.5 * gamma * self._n_phi  # Rankine: P = h (p_quad h + p_lin)
+        self._p_lin = 2.0 * self._c * np.sqrt(self._n_phi)
+        self._deform_list = [float(d) for d in self._deform]
 
     def soil_at_wheel(self, k: int) -> SoilParams:
         """The soil (floats) under road wheel ``k``'s track at the last `sample_soil`."""
@@ -269,10 +291,10 @@ class TrackSoilInjector:
         return self.r_belt[self.track_of[k]]
 
     # -- the substep -------------------------------------------------------------------------
-    def apply(self) -> None:
-        """Compute and apply the track forces for the coming substep (the hot path)."""
-        cid, bid, dt, dx = self.client, self.body_id, self.dt_s, self.dx_m
-        nt, n_cells, prm = len(self.tracks), self.params.n_cells, self.params
+    def _read_state(self) -> tuple:
+        """One batched PyBullet read: the base pose and axes, the hull velocities in hull
+        axes, the road-wheel loads, the belt speeds and the tracks' ground speeds."""
+        cid, bid = self.client, self.body_id
         contacts = p.getContactPoints(bodyA=bid, bodyB=self.ground_id, physicsClientId=cid)
         joints = p.getJointStates(bid, self.spin_joints, physicsClientId=cid)
         pos, orn = p.getBasePositionAndOrientation(bid, physicsClientId=cid)
@@ -295,24 +317,221 @@ class TrackSoilInjector:
                 self.chassis_contact = True
                 continue
             load[k] += f
-        # Belt speed, track ground speed, per-cell sliding velocity (hull axes).
+        # Belt speed, track ground speed (hull axes).
         u_list = [self.r_belt[i] * sum(joints[k][1] for k in ks) / len(ks)
                   for i, ks in enumerate(self.tracks)]
         vx_list = [vbx + wby * zc - wbz * yi for zc, yi in zip(self.z_list, self.y_list,
                                                                 strict=True)]
+        return pos, (ex, ey, ez, r), (vby, wbx, wbz), load, u_list, vx_list
+
+    def _slip_factor(self, u_list: list[float], vx_list: list[float]):
+        """The tracks' slips i = (u - V)/u in [-1, 1] (0 at rest) and Lyasko's slip-sinkage
+        factors (`track.slip_sinkage_factor`), inlined (hot path)."""
+        slip = []
+        for ui, vi in zip(u_list, vx_list, strict=True):
+            s = (ui - vi) / ui if abs(ui) > 1e-3 else (0.0 if abs(vi) < 1e-3 else -1.0)
+            slip.append(min(max(s, -1.0), 1.0))
+        factor = [(1.0 + i) / (1.0 - 0.5 * i) if i > 0.0 else 1.0 for i in slip]
+        return slip, factor
+
+    def apply(self) -> None:
+        """Compute and apply the track forces for the coming substep (the hot path).
+
+        The physics of `apply_reference` (the plain functions of
+        `slipenv.terramechanics.track` composed) with the numpy work on these small
+        (2, n_tracks, n_cells) fields fused: preallocated buffers, in-place operations, the
+        Janosi exponential shared by the stress and its tangent stiffness, the walls and berms
+        advected as one array, the upwinding done per track with slices instead of masks.
+        """
+        dt, dx, prm = self.dt_s, self.dx_m, self.params
+        nt, n_cells = len(self.tracks), prm.n_cells
+        pos, axes, (vby, wbx, wbz), load, u_list, vx_list = self._read_state()
+        # Sliding velocity of the belt over the ground at the cell centres (hull axes).
+        v_cell = self._v_cell
+        v_cell[0] = np.array([vi - ui for vi, ui in zip(vx_list, u_list, strict=True)])[:, None]
+        np.multiply(self.x_cell, wbz, out=v_cell[1])
+        v_cell[1] += np.array([vby - wbx * zc for zc in self.z_list])[:, None]
+        # Pressure and sinkage (`bekker_sinkage_m` times `slip_sinkage_factor`).
+        q = (self.spread_all @ np.array(load)).reshape(nt, n_cells)
+        pressure = q * self._inv_area
+        slip, factor = self._slip_factor(u_list, vx_list)
+        z = (pressure * self._inv_kb) ** self._inv_n
+        z *= np.array([f * d for f, d in zip(factor, self._deform_list, strict=True)])[:, None]
+        self.sinkage_m = z
+        # Shear field j and stress-direction state e (`advance_shear`), upwinded per track.
+        j, e = self.j, self.e
+        jsum_old = j[..., :-1] + j[..., 1:]
+        fwd = [ui > 1e-3 for ui in u_list]
+        bwd = [ui < -1e-3 for ui in u_list]
+        a_list = [abs(ui) * (dt / dx) for ui in u_list]
+        src = (0.5 * wbz * self._sign) * jsum_old[::-1]
+        src += v_cell
+        e_src = (wbz * self._sign) * e[::-1]
+        e_src += v_cell
+        leak = np.hypot(v_cell[0], v_cell[1])
+        leak *= dt / prm.direction_length_m
+        leak += 1.0
+        if all(fwd):
+            a = np.array(a_list)[:, None]
+            j[..., 1:] += a * (j[..., :-1] - j[..., 1:]) + dt * src
+            j[..., 0] = 0.0
+            e_shift = self._e_shift
+            e_shift[..., 1:] = e[..., :-1]
+            e += a * (e_shift - e) + dt * e_src
+        else:
+            for i in range(nt):
+                _upwind_track(j[:, i], e[:, i], src[:, i], e_src[:, i], a_list[i], fwd[i],
+                              bwd[i], dt)
+        e /= leak
+        # Cell shear forces (`cell_forces`) and the soil-spring dampers.
+        jsum = j[..., :-1] + j[..., 1:]  # twice the cells' j
+        strength = q * self._tan_phi
+        strength += self._c_area  # (c + p tan phi) b dx
+        decay = np.hypot(jsum[0], jsum[1])
+        decay *= self._neg_half_inv_k
+        np.exp(decay, out=decay)  # exp(-|j|/K)
+        e_abs = np.hypot(e[0], e[1])
+        ratio = 1.0 - decay
+        ratio *= strength
+        ratio /= np.maximum(e_abs, 1e-300)  # tau b dx / |e|
+        ratio *= -1.0
+        out = self._out
+        f_shear = out[2:4]
+        np.multiply(e, ratio, out=f_shear)
+        tau_a = np.hypot(f_shear[0], f_shear[1])
+        # Dampers (`apply_reference`): 2 zeta sqrt(k m) capped at half m/dt, per unit time;
+        # k along the stress the Janosi tangent stiffness, across it tau A / e_max.
+        kk = self._kk
+        np.multiply(strength, decay, out=kk[0])
+        kk[0] *= self._inv_k
+        np.multiply(tau_a, 1.0 / prm.direction_length_m, out=kk[1])
+        np.sqrt(kk, out=kk)
+        kk *= self._two_zeta_sqrt_m
+        np.minimum(kk, self._cap, out=kk)
+        kk *= 1.0 / dt
+        dj = jsum - jsum_old
+        dj *= 0.5
+        n_hat = f_shear * (-1.0 / np.maximum(tau_a, 1e-300))  # e/|e| (0 if no stress)
+        dj_par = (dj * n_hat).sum(axis=0) * n_hat
+        f_damp = kk[0] * dj_par
+        dj -= dj_par
+        dj *= kk[1]
+        f_damp += dj
+        f_damp *= -1.0
+        # Side walls and berms (`advance_wall`, `wall_force_n_per_m`).
+        wb = self._wall_berm
+        if all(vt > 1e-4 for vt in vx_list):  # the common case, in one go
+            aw = np.array([min(abs(vt) * (dt / dx), 1.0) for vt in vx_list])[:, None]
+            wb[..., 1:] += aw * (wb[..., :-1] - wb[..., 1:])
+            wb[..., :1] -= aw * wb[..., :1]
+        else:
+            for i in range(nt):
+                _upwind_wall(wb[:, :, i], vx_list[i], dt / dx)
+        wall, berm = self.wall, self.berm
+        step = v_cell[1] * dt
+        left = np.maximum(step, 0.0)  # outward motion of the left wall
+        wall[0] += step
+        wall[1] -= step
+        np.maximum(wall, 0.0, out=wall)
+        berm[0] += z * left
+        left -= step
+        left *= z
+        berm[1] += left
+        h = np.maximum(berm, 0.0)
+        h *= self._two_tan_phi
+        np.sqrt(h, out=h)  # berm height
+        h += z
+        np.minimum(h, self.max_wall_m, out=h)
+        pres = self._p_quad * h
+        pres += self._p_lin
+        pres *= h  # Rankine passive thrust [N/m]
+        np.multiply(h, 0.1, out=h)
+        np.maximum(h, 5e-4, out=h)  # mobilisation length d_b
+        mob = wall / h
+        mob *= -1.0
+        np.expm1(mob, out=mob)
+        mob *= pres  # -P (1 - e^{-d/d_b})
+        f_wall = out[4]
+        np.subtract(mob[0], mob[1], out=f_wall)
+        f_wall *= dx
+        # Per road wheel: total, shear, wall and damper magnitude; per track the yaw moment of
+        # the lateral forces about the road wheels and the wall force: one product.
+        np.add(f_shear, f_damp, out=out[0:2])
+        out[1] += f_wall
+        np.hypot(f_damp[0], f_damp[1], out=out[5])
+        sums = self._reduce @ out.reshape(6, -1).T  # (n + 2 n_tracks, 6)
+        n = self.n
+        self._apply_forces(pos, axes, sums[:n], sums[n:n + nt, 1].tolist(),
+                           z.max(axis=1).tolist(), load, vx_list, vby, wbx, wbz)
+        self.wall_n = sums[n + nt:, 4].tolist()
+        self.track_slip = slip
+
+    def _apply_forces(self, pos, axes, per_wheel: np.ndarray, moment: list[float],
+                      z_max: list[float], load: list[float], vx_list: list[float], vby: float,
+                      wbx: float, wbz: float) -> None:
+        """Apply each road wheel's share of the cell forces at its contact point, each
+        track's rut resistance on the hull at its centre line and its residual yaw moment;
+        record the readings (``per_wheel``, (n, 6): per road wheel total x, y, shear x, y,
+        wall, |damper|)."""
+        cid, bid, dt, prm = self.client, self.body_id, self.dt_s, self.params
+        nt = len(self.tracks)
+        ex, ey, ez, r = axes
+        apply_force, world = p.applyExternalForce, p.WORLD_FRAME
+        px, py, pz = pos
+        links = self.links
+        rot = np.array(r).reshape(3, 3)  # body -> world
+        points = (self._contact_base @ rot.T + pos).tolist()
+        forces = (per_wheel[:, :2] @ rot[:, :2].T).tolist()
+        for k in range(self.n):
+            apply_force(bid, links[k], forces[k], points[k], world, physicsClientId=cid)
+        res_out = [0.0] * self.n
+        for i, ks in enumerate(self.tracks):
+            # Compaction resistance (rut state) along the track, on the hull at its centre line.
+            vt = vx_list[i]
+            self.travel[i] += vt * dt
+            r_c = 0.0
+            if self._deform[i] > 0.0:
+                r_c = self._rc_coef[i] * z_max[i] ** self._n_plus_1[i]
+            v_reg = max(prm.resistance_speed_mps, 2.0 * r_c * dt / (self.mass_kg / nt))
+            f_res, self.cut_front[i], self.cut_rear[i] = rut_resistance_n(
+                r_c, self.travel[i], self.cut_front[i], self.cut_rear[i], vt, v_reg)
+            if f_res != 0.0:
+                yi, zc = self.y_list[i], self.z_list[i]
+                point = (px + yi * ey[0] + zc * ez[0], py + yi * ey[1] + zc * ez[1],
+                         pz + yi * ey[2] + zc * ez[2])
+                apply_force(bid, -1, (f_res * ex[0], f_res * ex[1], f_res * ex[2]), point,
+                            world, physicsClientId=cid)
+            total_w = sum(load[k] for k in ks)
+            for k in ks:
+                res_out[k] = abs(f_res) * (load[k] / total_w if total_w > 0.0 else 0.0)
+            mz = moment[i]
+            if mz != 0.0:
+                p.applyExternalTorque(bid, -1, (mz * ez[0], mz * ez[1], mz * ez[2]), world,
+                                      physicsClientId=cid)
+            vy_mean = vby + wbz * self.x_mid[i] - wbx * self.z_list[i]
+            self.track_tanb[i] = vy_mean / vt if abs(vt) > 1e-3 else 0.0
+        self.load, self.res = load, res_out
+        self.fx = per_wheel[:, 2].tolist()
+        self.fy = (per_wheel[:, 3] + per_wheel[:, 4]).tolist()
+        self.damping_n = per_wheel[:, 5].tolist()
+
+    def apply_reference(self) -> None:
+        """`apply` written as the plain functions of `slipenv.terramechanics.track` composed
+        step by step: the readable text of the substep. `apply` is the same physics with the
+        numpy work fused (fewer, in-place operations on preallocated buffers); they agree to
+        rounding (tests/sim/test_track_soil.py)."""
+        dt, dx = self.dt_s, self.dx_m
+        nt, n_cells, prm = len(self.tracks), self.params.n_cells, self.params
+        pos, axes, (vby, wbx, wbz), load, u_list, vx_list = self._read_state()
         u = np.array(u_list)
         vx_track = np.array(vx_list)
         v_cell = np.empty((2, nt, n_cells))
         v_cell[0] = (vx_track - u)[:, None]
         v_cell[1] = vby + wbz * self.x_cell - wbx * self.z_c[:, None]
-        # Pressure and sinkage: bekker_sinkage_m times slip_sinkage_factor, inlined (hot path).
+        # Pressure and sinkage: bekker_sinkage_m times slip_sinkage_factor, inlined.
         q = (self.spread_all @ np.array(load)).reshape(nt, n_cells)
         pressure = q * self._inv_area
-        slip = []  # i = (u - V)/u, in [-1, 1]; 0 at rest
-        for ui, vi in zip(u_list, vx_list, strict=True):
-            s = (ui - vi) / ui if abs(ui) > 1e-3 else (0.0 if abs(vi) < 1e-3 else -1.0)
-            slip.append(min(max(s, -1.0), 1.0))
-        factor = [(1.0 + i) / (1.0 - 0.5 * i) if i > 0.0 else 1.0 for i in slip]
+        slip, factor = self._slip_factor(u_list, vx_list)
         z = (pressure * self._inv_kb) ** self._inv_n * (np.array(factor) * self._deform)[:, None]
         self.sinkage_m = z
         # Shear field and its forces; the damper on each cell's Eulerian displacement rate.
@@ -346,53 +565,10 @@ class TrackSoilInjector:
         per_wheel = self.assign_all @ np.concatenate(
             (tot.reshape(2, -1), f_shear.reshape(2, -1), f_wall.reshape(1, -1),
              np.sqrt(f_damp[0] ** 2 + f_damp[1] ** 2).reshape(1, -1))).T  # (n, 6)
-        rows = per_wheel.tolist()
-        apply_force, world = p.applyExternalForce, p.WORLD_FRAME
-        px, py, pz = pos
-        links = self.links
-        for k in range(self.n):
-            fxk, fyk, sxk, syk, fwk, fdk = rows[k]
-            cx, cy, cz = self.contact_base[k]
-            point = (px + ex[0] * cx + ey[0] * cy + ez[0] * cz,
-                     py + ex[1] * cx + ey[1] * cy + ez[1] * cz,
-                     pz + ex[2] * cx + ey[2] * cy + ez[2] * cz)
-            apply_force(bid, links[k], (fxk * ex[0] + fyk * ey[0], fxk * ex[1] + fyk * ey[1],
-                                        fxk * ex[2] + fyk * ey[2]), point, world,
-                        physicsClientId=cid)
-            rows[k] = (sxk, syk + fwk, fdk)
-        res_out = [0.0] * self.n
-        z_max = z.max(axis=1).tolist()
-        for i, ks in enumerate(self.tracks):
-            # Compaction resistance (rut state) along the track, on the hull at its centre line.
-            vt = vx_list[i]
-            self.travel[i] += vt * dt
-            r_c = 0.0
-            if self._deform[i] > 0.0:
-                r_c = self._rc_coef[i] * z_max[i] ** self._n_plus_1[i]
-            v_reg = max(prm.resistance_speed_mps, 2.0 * r_c * dt / (self.mass_kg / nt))
-            f_res, self.cut_front[i], self.cut_rear[i] = rut_resistance_n(
-                r_c, self.travel[i], self.cut_front[i], self.cut_rear[i], vt, v_reg)
-            if f_res != 0.0:
-                yi, zc = self.y_list[i], self.z_list[i]
-                point = (px + yi * ey[0] + zc * ez[0], py + yi * ey[1] + zc * ez[1],
-                         pz + yi * ey[2] + zc * ez[2])
-                apply_force(bid, -1, (f_res * ex[0], f_res * ex[1], f_res * ex[2]), point,
-                            world, physicsClientId=cid)
-            total_w = sum(load[k] for k in ks)
-            for k in ks:
-                res_out[k] = abs(f_res) * (load[k] / total_w if total_w > 0.0 else 0.0)
-            mz = moment[i]
-            if mz != 0.0:
-                p.applyExternalTorque(bid, -1, (mz * ez[0], mz * ez[1], mz * ez[2]), world,
-                                      physicsClientId=cid)
-            vy_mean = vby + wbz * self.x_mid[i] - wbx * self.z_list[i]
-            self.track_tanb[i] = vy_mean / vt if abs(vt) > 1e-3 else 0.0
+        self._apply_forces(pos, axes, per_wheel, moment, z.max(axis=1).tolist(), load,
+                           vx_list, vby, wbx, wbz)
         self.wall_n = f_wall.sum(axis=1).tolist()
         self.track_slip = slip
-        self.load, self.res = load, res_out
-        self.fx = [row[0] for row in rows]
-        self.fy = [row[1] for row in rows]
-        self.damping_n = [row[2] for row in rows]
 
     # -- reading ----------------------------------------------------------------------------
     def contact_state(self) -> WheelContactState:
@@ -408,7 +584,37 @@ class TrackSoilInjector:
             damper_n=np.array(self.damping_n),
         )
 
-    def joint_torques(self) -> list[float]:
-        """Motor torque of each road-wheel joint at the last substep [N m]."""
-        states = p.getJointStates(self.body_id, self.spin_joints, physicsClientId=self.client)
-        return [js[3] for js in states]
+
+def _upwind_track(j: np.ndarray, e: np.ndarray, src: np.ndarray, e_src: np.ndarray, a: float,
+                  forward: bool, backward: bool, dt: float) -> None:
+    """`advance_shear`'s upwind step for one track (in place, before the leak): ``j`` (2,
+    n_cells + 1) at the faces, ``e`` (2, n_cells) at the centres, ``src``/``e_src`` their
+    sources at the centres, ``a`` = |u| dt/dx; the entry face is zeroed. At rest (neither
+    direction) every face integrates the mean source of its neighbouring cells."""
+    if forward:
+        j[:, 1:] += a * (j[:, :-1] - j[:, 1:]) + dt * src
+        j[:, 0] = 0.0
+        e[:, 1:] += a * (e[:, :-1] - e[:, 1:]) + dt * e_src[:, 1:]
+        e[:, 0] += a * (0.0 - e[:, 0]) + dt * e_src[:, 0]
+    elif backward:
+        j[:, :-1] += a * (j[:, 1:] - j[:, :-1]) + dt * src
+        j[:, -1] = 0.0
+        e[:, :-1] += a * (e[:, 1:] - e[:, :-1]) + dt * e_src[:, :-1]
+        e[:, -1] += a * (0.0 - e[:, -1]) + dt * e_src[:, -1]
+    else:
+        j[:, 0] += dt * src[:, 0]
+        j[:, 1:-1] += dt * (0.5 * (src[:, :-1] + src[:, 1:]))
+        j[:, -1] += dt * src[:, -1]
+        e += dt * e_src
+
+
+def _upwind_wall(wb: np.ndarray, ground_speed_mps: float, dt_over_dx: float) -> None:
+    """`advance_wall`'s upwind step of one track's walls and berms ``wb`` (2, 2, n_cells), in
+    place: the ground passes the hull at -V, fresh soil entering at the entry end."""
+    a = min(abs(ground_speed_mps) * dt_over_dx, 1.0)
+    if ground_speed_mps > 1e-4:
+        wb[..., 1:] += a * (wb[..., :-1] - wb[..., 1:])
+        wb[..., :1] -= a * wb[..., :1]
+    elif ground_speed_mps < -1e-4:
+        wb[..., :-1] += a * (wb[..., 1:] - wb[..., :-1])
+        wb[..., -1:] -= a * wb[..., -1:]

@@ -37,7 +37,7 @@ import numpy as np
 
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.compiled import wheel_loop_module
-from slipenv.terramechanics.bekker import rut_following_compaction_n
+from slipenv.terramechanics.bekker import rut_following_compaction_n, rut_load_ratio
 from slipenv.terramechanics.contact import ContactGeometry
 from slipenv.terramechanics.models import ForceModel, wheel_kernel
 from slipenv.terramechanics.slip_dynamics import (
@@ -133,7 +133,8 @@ class WheelSoilInjector:
     castor_own_geometry : bool
         If True, a castor's motion resistance is the Bekker compaction of its own wheel (its
         radius, width and contact length; `ForceModel.with_geometry`), not of the driven
-        wheels' geometry the force model was built for.
+        wheels' geometry the force model was built for. Default False (see
+        ``SlipEnvConfig.castor_own_geometry`` for why).
     compiled : bool or None
         Run the substep loop compiled (``slipenv/sim/_wheel_loop.c``, a transcription of this
         class's Python loop, tested bit for bit against it): None (default) when it was built
@@ -298,6 +299,7 @@ class WheelSoilInjector:
                 kernels[id(model), id(sp)] = wheel_kernel(model, sp)
         self._kernels = [kernels[id(m), id(sp)] for m, sp in zip(self._models, rows, strict=True)]
         self._damping = [self._soil_damping(k) for k in range(self.n)]
+        self._rut_ratio = [self._rut_load_ratios(k, sp) for k, sp in enumerate(rows)]
         self._rut_damping = [self._resistance_damping(k) for k in range(self.n)]
         # What `apply` reads per wheel, in one tuple (one unpacking instead of ten lookups).
         self._wheel_rows = [
@@ -312,7 +314,7 @@ class WheelSoilInjector:
             for k, (model, sp) in enumerate(zip(self._models, rows, strict=True)):
                 set_wheel(k, self.driven[k], self.spin_index[k], self._r_eff[k], self._h[k],
                           *self._damping[k], self._rut_damping[k], *self.leaders[k],
-                          constants[id(model), id(sp)])
+                          *self._rut_ratio[k], constants[id(model), id(sp)])
 
     def soil_at_wheel(self, k: int) -> SoilParams:
         """The soil (floats) under wheel ``k`` at the last `sample_soil` (read-only)."""
@@ -485,18 +487,43 @@ class WheelSoilInjector:
         self._load, self._fx, self._fy, self._res, self._damper = (load, fx_out, fy_out,
                                                                    res_out, damp_out)
 
+    def _rut_load_ratios(self, k: int, soil_params: SoilParams) -> tuple[float, float]:
+        """(forward, reverse): the load ratio of wheel ``k``'s leader's rut on its soil
+        (`bekker.rut_load_ratio`) between the geometries their compaction laws use; 1.0
+        without a leader."""
+        out = []
+        for leader in self.leaders[k]:
+            if leader < 0:
+                out.append(1.0)
+                continue
+            (b_f, d_f), (b_l, d_l) = self._law_geometry(k), self._law_geometry(leader)
+            out.append(rut_load_ratio(b_f, d_f, b_l, d_l, float(soil_params.k_c),
+                                      float(soil_params.k_phi)))
+        return out[0], out[1]
+
+    def _law_geometry(self, k: int) -> tuple[float, float]:
+        """(width, diameter) [m] of the compaction law wheel ``k`` meets: its model's geometry
+        (the driven wheels' unless `castor_own_geometry`), else its own wheel."""
+        geometry = getattr(self._models[k], "geometry", None)
+        if geometry is None:
+            return self.width[k], 2.0 * self.radius[k]
+        return geometry.width_m, 2.0 * geometry.radius_m
+
     def _multi_pass(self, k: int, res: float, load_n: float, v_long: float,
                     loads: list[float]) -> float:
         """Resistance of wheel ``k`` when it runs in the rut of the wheel ahead (`multi_pass`).
 
         The leader is the wheel ahead in the direction of travel (sign of v_long); its rut, cut
-        on the soil now under wheel ``k``, was compacted by the leader's load, so the follower's
-        compaction is `bekker.rut_following_compaction_n` of the two compactions (the
-        rolling term f_r W is kept whole)."""
-        leader = self.leaders[k][0 if v_long >= 0.0 else 1]
+        on the soil now under wheel ``k``, is as deep as this wheel would sink under the load
+        q W_leader (`bekker.rut_load_ratio`; q = 1 for wheels alike), so the follower's
+        compaction is `bekker.rut_following_compaction_n` of its own law at its load and at
+        that load (the rolling term f_r W is kept whole)."""
+        way = 0 if v_long >= 0.0 else 1
+        leader = self.leaders[k][way]
         if leader < 0 or loads[leader] <= 0.0:
             return res
-        f_r, w_lead = self._f_r, loads[leader]
+        # The leader's rut depth as the load that sinks this wheel as deep (1.0 if alike).
+        f_r, w_lead = self._f_r, self._rut_ratio[k][way] * loads[leader]
         lead = self._kernels[k](0.0, 0.0, w_lead)[2] - f_r * w_lead
         rolling = f_r * load_n
         return rolling + rut_following_compaction_n(res - rolling, lead)
@@ -540,11 +567,6 @@ class WheelSoilInjector:
             in_contact=load > 0.0, damper_n=np.array(self.damper),
         )
 
-    def joint_torques(self) -> list[float]:
-        """Motor torque of each spin joint at the last substep [N m]."""
-        states = p.getJointStates(self.body_id, self.spin_joints, physicsClientId=self.client)
-        return [js[3] for js in states]
-
 
 def _bekker_row(params: SoilParams) -> tuple[float, float, float, float]:
     """(k_c, k_phi, n, deformable) of one soil, in floats."""
@@ -565,10 +587,11 @@ def _wheel_sinkage_m(load_n: float, width_m: float, diameter_m: float,
 
 def _wheel_models(spec: VehicleSpec, force_model: ForceModel,
                   castor_own_geometry: bool) -> list[ForceModel]:
-    """The force model of each wheel: `force_model` itself for the driven wheels; for a castor
-    (``castor_own_geometry``) the same law on the castor's own contact geometry, whose Bekker
-    compaction differs (a narrow, small castor sinks deeper: Wong Ch. 5), when the model can
-    be rebound (`with_geometry`)."""
+    """The force model of each wheel: `force_model` itself for the driven wheels (it was built
+    for their geometry) and, unless ``castor_own_geometry``, for the castors; with it, a castor
+    gets the same law on its own contact geometry, whose Bekker compaction differs (a narrow,
+    small castor sinks deeper per newton: Wong Ch. 5), when the model can be rebound
+    (`ForceModel.with_geometry`)."""
     rebind = getattr(force_model, "with_geometry", None)
     geometry = getattr(force_model, "geometry", None)
     out: list[ForceModel] = []

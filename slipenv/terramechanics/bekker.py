@@ -23,7 +23,10 @@ A wheel running in the rut of a leading wheel therefore does the compaction work
 that rut: R_c = b k_eq (z_f^{n+1} - z_rut^{n+1})/(n+1), zero when it sinks no deeper. This
 neglects the (small) reloading work and the extra sinkage slip adds on later passes, which
 Holm measured on repeated tyre passes (Holm, J. Terramechanics 6(3), 1969): it is an upper
-bound on the multi-pass reduction, and therefore opt-in.
+bound on the multi-pass reduction, and therefore opt-in. A follower of another geometry (a
+castor behind a driven wheel) meets its own compaction at the leader's rut depth; as both
+are power laws with the same exponent, that is its own law at an equivalent load
+(`rut_load_ratio`).
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ __all__ = [
     "wheel_compaction_law",
     "track_compaction_law",
     "rut_following_compaction_n",
+    "rut_load_ratio",
 ]
 
 
@@ -143,3 +147,21 @@ def rut_following_compaction_n(compaction_n: float, rut_compaction_n: float) -> 
     """
     extra = compaction_n - rut_compaction_n
     return extra if extra > 0.0 else 0.0
+
+
+def rut_load_ratio(width_m: float, diameter_m: float, leader_width_m: float,
+                   leader_diameter_m: float, k_c: float, k_phi: float) -> float:
+    """Load ratio q such that a follower's compaction at the depth of a leader's rut is its
+    own wheel law at the load q W_leader (plain floats).
+
+    The leader (b_L, D_L) carrying W_L sinks to z_L = (alpha_L W_L)^(2/(2n+1)), alpha =
+    3/((3 - n) k_eq sqrt(D)), k_eq = k_c + b k_phi (`wheel_sinkage_m`); the follower's
+    compaction at that depth, b_f k_eq,f z_L^(n+1)/(n+1) (`compaction_resistance_n`), equals its
+    wheel law gamma_f W^e (`wheel_compaction_law`, e = (2n+2)/(2n+1)) at W = (alpha_L/alpha_f)
+    W_L, so q = alpha_L/alpha_f = k_eq,f sqrt(D_f)/(k_eq,L sqrt(D_L)), independent of n. Exactly
+    1.0 for the same geometry.
+    """
+    if width_m == leader_width_m and diameter_m == leader_diameter_m:
+        return 1.0
+    return ((k_c + width_m * k_phi) * diameter_m ** 0.5
+            / ((k_c + leader_width_m * k_phi) * leader_diameter_m ** 0.5))

@@ -5,7 +5,7 @@ implementation from before the filter was restructured for speed: one FarmField 
 frames (with a few readings removed and a clutter bearing added) run through schemes 1-4 and the
 oracle variant. The restructured filter must give the same state and covariance after every
 frame to 1e-12 (relative to each entry's largest magnitude in the run, at least 1), and skip and
-accept the same measurements.
+accept the same measurements: the numpy filter and the compiled kernel (``_ekf.c``) alike.
 """
 
 from __future__ import annotations
@@ -17,9 +17,12 @@ import pytest
 
 from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.lindgren import LindgrenEKF, LindgrenNoise, OracleSoil
+from slipenv.estimators.lindgren.ekf import compiled_available
 from tests.estimators.data.make_lindgren_reference import VARIANTS, unpack_frames
 
 DATA = Path(__file__).with_name("data") / "lindgren_reference.npz"
+KERNELS = [False, pytest.param(True, marks=pytest.mark.skipif(
+    not compiled_available(), reason="the _ekf extension is not built"))]
 
 
 @pytest.fixture(scope="module")
@@ -28,7 +31,7 @@ def reference():
         return {k: d[k] for k in d.files}
 
 
-def _filter(variant: str, ref: dict) -> LindgrenEKF:
+def _filter(variant: str, ref: dict, compiled: bool | None = None) -> LindgrenEKF:
     r, w, cpr = ref["geometry"]
     geometry = OdometryGeometry(float(r), float(w), float(cpr),
                                 tuple(int(i) for i in ref["geometry_left"]),
@@ -37,14 +40,18 @@ def _filter(variant: str, ref: dict) -> LindgrenEKF:
     if variant == "oracle":
         soil = OracleSoil((0.99 * geometry.wheel_radius_m, 1.01 * geometry.wheel_radius_m),
                           (1.2 * params.k_s0, 0.9 * params.k_s0))
-        return LindgrenEKF(geometry, 4, params, ref["beacons_xy"], oracle=soil)
-    return LindgrenEKF(geometry, int(variant[1]), params, ref["beacons_xy"])
+        return LindgrenEKF(geometry, 4, params, ref["beacons_xy"], oracle=soil,
+                           compiled=compiled)
+    return LindgrenEKF(geometry, int(variant[1]), params, ref["beacons_xy"], compiled=compiled)
 
 
+@pytest.mark.parametrize("compiled", KERNELS)
 @pytest.mark.parametrize("variant", VARIANTS)
-def test_lindgren_ekf_matches_frozen_reference_states_and_covariances(reference, variant):
+def test_lindgren_ekf_matches_frozen_reference_states_and_covariances(reference, variant,
+                                                                      compiled):
     frames = unpack_frames(reference)
-    ekf = _filter(variant, reference)
+    ekf = _filter(variant, reference, compiled)
+    assert ekf.compiled == compiled
     ekf.reset(*(float(v) for v in reference["pose0"]), frames[0])
     xs, Ps = [ekf.x.copy()], [ekf.P.copy()]
     for frame in frames[1:]:
@@ -71,7 +78,7 @@ def test_inlined_process_model_equals_the_plain_functions_bit_for_bit(reference,
     from slipenv.contracts import wrap_angle
     from slipenv.estimators.lindgren import models as lm
 
-    ekf = _filter(f"s{scheme}", reference)
+    ekf = _filter(f"s{scheme}", reference, compiled=False)
     rng = np.random.default_rng(7)
     p = ekf.params
     for _ in range(50):

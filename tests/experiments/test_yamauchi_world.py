@@ -7,7 +7,7 @@ import dataclasses
 
 import pytest
 
-from slipenv.experiments.yamauchi import PAPER, QUICK, Settings, make_world
+from slipenv.experiments.yamauchi import FULL, PAPER, QUICK, Settings, make_world
 from slipenv.experiments.yamauchi.docs import write_results_page
 from slipenv.experiments.yamauchi.settings import page_name
 
@@ -115,8 +115,9 @@ def test_the_preset_world_keeps_its_page_command_and_mechanisms(tmp_path, figure
     page = write_results_page(made_up_result(None, None), figures, tmp_path)
     assert page == tmp_path / "yamauchi.md"
     text = page.read_text()
-    assert f"`slipenv reproduce yamauchi --quick --seed 3 --docs {tmp_path}`" in text
-    assert "--vehicle" not in text and "--soil" not in text
+    # The command's default world is the track model's (issue 16): the preset's is spelt out.
+    assert (f"`slipenv reproduce yamauchi --vehicle tracked_patako --soil toyoura_sand --quick "
+            f"--seed 3 --docs {tmp_path}`") in text
     for sentence in PER_WHEEL_MECHANISMS:
         assert sentence in text, sentence
 
@@ -143,5 +144,14 @@ def test_the_cli_runs_the_world_it_is_given_from_the_quick_or_full_plan(monkeypa
     assert name == "yamauchi" and quick["quick"]
     assert quick["settings"] == dataclasses.replace(
         QUICK, vehicle="tracked_patako_wong_chiang", soil="dry_sand")
-    assert full["settings"] == Settings(vehicle="tracked_patako_wong_chiang")
+    assert full["settings"] == dataclasses.replace(FULL, vehicle="tracked_patako_wong_chiang")
     assert "settings" not in preset
+
+
+def test_the_command_runs_the_track_model_by_default_and_settings_keep_the_env_world():
+    """Issue 16 item 6: ``slipenv reproduce yamauchi`` (plans FULL and QUICK) runs the
+    Wong-Chiang track model on dry_sand; ``Settings()`` stays the env preset's world."""
+    for plan in (FULL, QUICK):
+        assert (plan.vehicle, plan.soil) == ("tracked_patako_wong_chiang", "dry_sand")
+        assert page_name(plan.vehicle, plan.soil) == "yamauchi_wong_chiang"
+    assert page_name(Settings().vehicle, Settings().soil) == "yamauchi"

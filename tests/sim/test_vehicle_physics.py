@@ -100,7 +100,7 @@ def test_on_soft_soil_slip_grows_with_drawbar_load_and_follows_t_equals_ks_s(
     radius = sim.spec.wheels[driven[0]].radius_m
     hitch = list(sim.body.base_to_reference_m)
     speeds, steer = twist_to_commands(sim.spec, 0.5, 0.0)
-    slips, torques = [], []
+    slips, torques, loads = [], [], []
     for fraction in (0.0, 0.02, 0.04, 0.06, 0.08):
         pull = fraction * weight
         sim.command(speeds, steer)
@@ -119,12 +119,19 @@ def test_on_soft_soil_slip_grows_with_drawbar_load_and_follows_t_equals_ks_s(
             assert truth.channel_torque_nm[c] == pytest.approx(expected, rel=0.03, abs=0.5)
         slips.append(float(contact.slip[driven[0]]))
         torques.append(radius * float(f[driven[0]]))
+        loads.append(float(contact.load_n[driven[0]]))
     slips, torques = np.array(slips), np.array(torques)
     assert np.all(np.diff(slips) > 0), slips  # more drawbar load, more slip
     if model != "linear":
         return  # Janosi/Okello bends at these slips (Lindgren Eq. 23); checked pointwise above
+    # The pull pitches the vehicle and moves load between the axles, and k_s grows with the
+    # load (T_max = r (A c + W tan phi), Lindgren Eq. 24): each point is brought to the last
+    # point's load before the line is fitted.
+    shear = soil.cohesion_pa * law.geometry.area_m2
+    tan_phi = math.tan(soil.friction_angle_rad)
+    torques = torques * (shear + loads[-1] * tan_phi) / (shear + np.array(loads) * tan_phi)
     slope, intercept = np.polyfit(slips, torques, 1)
-    load = np.array([float(contact.load_n[driven[0]])])
+    load = np.array([loads[-1]])
     ds = 1e-4
     f1, _ = law(np.array([ds]), np.zeros(1), load, soil)
     k_s = radius * float(f1[0]) / ds

@@ -144,7 +144,7 @@ def _drive(make_sim, monkeypatch, pure: bool, vehicle: str, soil: str, force_mod
 
 
 @pytest.mark.parametrize("vehicle, soil, force_model, kw", [
-    ("farm_2wd", "field_loam", "janosi", {"multi_pass": True}),
+    ("farm_2wd", "field_loam", "janosi", {"multi_pass": True, "castor_own_geometry": True}),
     ("rover_4ws", "lunar_simulant", "reina", {}),
     ("husky", "loose_sand", "linear", {}),
 ])

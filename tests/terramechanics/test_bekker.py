@@ -5,10 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from slipenv.terramechanics import CONCRETE, LOOSE_SAND
+from slipenv.terramechanics import CONCRETE, FIELD_LOAM, LOOSE_SAND
 from slipenv.terramechanics.bekker import (
     compaction_resistance_n,
     rut_following_compaction_n,
+    rut_load_ratio,
     track_compaction_law,
     track_sinkage_m,
     wheel_compaction_law,
@@ -104,3 +105,18 @@ def test_a_wheel_in_the_rut_of_an_equal_wheel_compacts_nothing_and_a_heavier_one
     assert rut_following_compaction_n(r_follow, r_lead) == pytest.approx(expected, rel=1e-12)
     assert rut_following_compaction_n(r_lead, r_lead) == 0.0
     assert rut_following_compaction_n(r_lead, r_follow) == 0.0  # lighter: no deeper
+
+
+def test_rut_load_ratio_gives_the_followers_compaction_at_the_leaders_rut_depth():
+    """A narrow castor (0.12 m x 0.30 m) behind a wide wheel (0.25 m x 0.55 m): its own law at
+    q W_leader equals Bekker's R_c for its width at the leader's sinkage, for any n."""
+    soil = FIELD_LOAM
+    for n in (0.5, soil.n_exp, 1.3):
+        gamma, e = wheel_compaction_law(0.12, 0.30, soil.k_c, soil.k_phi, n)
+        for w_lead in (200.0, 1500.0):
+            z = float(wheel_sinkage_m(w_lead, 0.25, 0.55, soil.k_c, soil.k_phi, n))
+            at_rut = float(compaction_resistance_n(z, 0.12, soil.k_c, soil.k_phi, n))
+            q = rut_load_ratio(0.12, 0.30, 0.25, 0.55, soil.k_c, soil.k_phi)
+            assert float(gamma) * (q * w_lead) ** float(e) == pytest.approx(at_rut, rel=1e-12)
+    assert rut_load_ratio(0.25, 0.55, 0.25, 0.55, soil.k_c, soil.k_phi) == 1.0
+    assert rut_load_ratio(0.12, 0.30, 0.25, 0.55, soil.k_c, soil.k_phi) < 1.0  # deeper per N

@@ -34,7 +34,8 @@ def circles_metrics(rec: Recording, runs: dict[str, FilterRun]) -> tuple[dict, d
     t0, t1 = rec.t_s[w][0], rec.t_s[w][-1]
     out: dict = {k: {} for k in ("mean_deviation_m", "true_error_mean_m", "true_rmse_m",
                                  "nees_pose", "nis", "autocorr_mean", "autocorr_var",
-                                 "autocorr_share_inside", "n_samples", "bearings_gated")}
+                                 "autocorr_share_inside", "n_samples", "bearings_gated",
+                                 "odometry_rejected")}
     rho = {}
     for name, run in runs.items():
         err, err3 = pose_errors(run, rec.truth)
@@ -44,8 +45,14 @@ def circles_metrics(rec: Recording, runs: dict[str, FilterRun]) -> tuple[dict, d
         out["true_rmse_m"][name] = float(np.sqrt(np.mean(err[w] ** 2)))
         out["nees_pose"][name] = float(np.mean(nees(err3[w], run.P[w])))
         out["bearings_gated"][name] = int(run.ekf.skipped.get("bearing_gated", 0))
+        if not run.ekf.uses_odometry:  # scheme 1
+            continue
         odo = [r for r in run.ekf.history["odo"] if t0 <= r[0] <= t1]
-        if not odo:  # scheme 1 has no odometry
+        if not odo:  # every odometry update in the window rejected: no statistics
+            for key in ("nis", "autocorr_mean", "autocorr_var", "autocorr_share_inside"):
+                out[key][name] = None
+            out["n_samples"][name] = 0
+            out["odometry_rejected"][name] = dict(run.ekf.skipped)
             continue
         rep = consistency_report(odo, name, lags=range(1, LAGS + 1))
         out["nis"][name] = rep.nis_mean
@@ -56,8 +63,9 @@ def circles_metrics(rec: Recording, runs: dict[str, FilterRun]) -> tuple[dict, d
         rho[name] = (rep.lags, rep.rho, 1.96 / math.sqrt(rep.n_samples))
     del out["mean_deviation_m"]["scheme1"]
     k4 = out["n_samples"]["scheme4"]
-    out["nis"]["band"] = list(chi2_mean_band(k4, 2, 0.05, "exact"))
-    out["nis"]["band_wilson_hilferty"] = list(chi2_mean_band(k4, 2, 0.05, "wilson_hilferty"))
+    out["nis"]["band"] = list(chi2_mean_band(k4, 2, 0.05, "exact")) if k4 else [None, None]
+    out["nis"]["band_wilson_hilferty"] = (list(chi2_mean_band(k4, 2, 0.05, "wilson_hilferty"))
+                                          if k4 else [None, None])
     # NEES samples are correlated in time: this band is what independent samples would give
     out["nees_pose"]["band_if_independent"] = list(chi2_mean_band(int(w.sum()), 3))
     out["soil_estimate_scheme4"] = soil_estimate(runs["scheme4"])

@@ -15,8 +15,11 @@ __all__ = ["finite", "format_table", "markdown_rows", "nis_distance", "table_row
            "write_json"]
 
 
-def nis_distance(value: float, band: list[float]) -> float:
-    """How far a time-averaged NIS lies outside its band (0 inside)."""
+def nis_distance(value: float | None, band: list) -> float | None:
+    """How far a time-averaged NIS lies outside its band (0 inside); None without a NIS (every
+    odometry update of the window rejected) or a band."""
+    if value is None or band[0] is None:
+        return None
     return max(band[0] - value, value - band[1], 0.0)
 
 
@@ -30,7 +33,9 @@ def targets(m: dict) -> dict[str, dict]:
                                                     nis_distance(nis_["scheme3"], nis_["band"])),
         "slip_model <= 1.5 oracle": (drop["slip_model"], 1.5 * drop["oracle"]),
     }
-    return {k: {"value": v, "limit": lim, "met": bool(v <= lim if "<=" in k else v < lim)}
+    return {k: {"value": v, "limit": lim,
+                "met": v is not None and lim is not None and bool(v <= lim if "<=" in k
+                                                                  else v < lim)}
             for k, (v, lim) in rows.items()}
 
 
@@ -85,7 +90,8 @@ def table_rows(m: dict, paper: dict) -> list[tuple]:
             rows.append((f"{label}, {s}", paper[key][s], *each(lambda b, k=key, s=s: b[k][s])))
     rows.append(("NIS 95 % band: exact (Eq. 44)", "1.883-2.120",
                  *each(lambda b: "{:.3f}-{:.3f} ({:.3f}-{:.3f})".format(
-                     *b["nis"]["band"], *b["nis"]["band_wilson_hilferty"]))))
+                     *b["nis"]["band"], *b["nis"]["band_wilson_hilferty"])
+                     if b["nis"]["band"][0] is not None else None)))
     rows.append(("K, odometric innovations in the window", paper["n_samples"],
                  *each(lambda b: b["n_samples"]["scheme4"])))
     rows.append((f"(b) straights, laser + odometry, laser cut at {d['cut_s']:.0f} s, mean of "
@@ -107,8 +113,12 @@ def cell(v) -> str:
 
 def target_lines(tg: dict) -> list[str]:
     """One ``[met]``/``[MISSED]`` line per target: value against limit."""
-    return [f"[{'met' if t['met'] else 'MISSED'}] {k}: {t['value']:.4g} vs {t['limit']:.4g}"
+    return [f"[{'met' if t['met'] else 'MISSED'}] {k}: {_g(t['value'])} vs {_g(t['limit'])}"
             for k, t in tg.items()]
+
+
+def _g(value: float | None) -> str:
+    return "n/a" if value is None else f"{value:.4g}"
 
 
 def format_table(m: dict, paper: dict, tg: dict, run_time_s: float,

@@ -6,7 +6,8 @@ when rotating on a loose weak slope": track slip kinematics (Eq. 1-7), Endo's sl
 relation (Eq. 8), a slip-angle regression on roll, angular displacement and rotation radius
 (Eq. 9) and a path-following law with slip-angle feed-forward (§3, Eq. 9-10).
 
-The ``tracked_patako`` vehicle on ``toyoura_sand`` repeats the paper's rotation runs
+By default the Wong-Chiang track model (``tracked_patako_wong_chiang``, issue 16) on a loose
+dry sand (``dry_sand``) repeats the paper's rotation runs
 (:mod:`.rotation`), identifies Endo's n and Eq. 9 from them (:mod:`.slips`), replays the
 odometries on held-out runs (:mod:`.odometry`) and drives the 15° circle with both laws
 (:mod:`.circle`), each episode one :func:`slipenv.rollout.rollout`. The paper's numbers are in
@@ -15,10 +16,11 @@ paper-vs-simulation table (:mod:`.report`), saves the figures (:mod:`.plots`), t
 with ``docs_dir``, the results page (:mod:`.docs`, ``docs/reproductions/yamauchi.md``), where
 the measured numbers, the departure from the paper and what limits the result are discussed.
 The fitted model the tracked env observes with is version-controlled data
-(:mod:`.model_file`). ``Settings(vehicle="tracked_patako_wong_chiang", soil="dry_sand")``
-re-runs everything with the Wong-Chiang track model and a loose dry sand (issue 16); on the
-command line ``slipenv reproduce yamauchi --vehicle tracked_patako_wong_chiang --soil dry_sand
---docs DIR`` writes its page ``DIR/yamauchi_wong_chiang.md``.
+(:mod:`.model_file`), fitted in the env preset's world: ``Settings(vehicle=None, soil=None)``
+or on the command line ``slipenv reproduce yamauchi --vehicle tracked_patako --soil
+toyoura_sand`` (the per-wheel track law on ``toyoura_sand``, page ``DIR/yamauchi.md``); the
+default world's page is ``DIR/yamauchi_wong_chiang.md`` (plans :data:`.settings.FULL` and
+:data:`.settings.QUICK`).
 """
 
 from .circle import LimitObservation, circle_episode, mean_episodes
@@ -27,12 +29,13 @@ from .model_file import MODEL_FILE, save_model
 from .odometry import TrueSlipAngle, odometry_errors, replay
 from .paper import PAPER
 from .rotation import InfoRecorder, RotationRun, TurnLimit, collect_runs, rotation_run, split_runs
-from .settings import ENV_ID, QUICK, STEER_ON, TARGETS, Settings
+from .settings import ENV_ID, FULL, QUICK, STEER_ON, TARGETS, Settings
 from .slips import fit_n, run_slips, slip_run
 from .world import make_world
 
 __all__ = [
     "ENV_ID",
+    "FULL",
     "MODEL_FILE",
     "PAPER",
     "QUICK",

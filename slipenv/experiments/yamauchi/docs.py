@@ -1,4 +1,4 @@
-"""The results page ``docs/reproductions/yamauchi.md``: the prose that explains the experiment,
+"""The results pages ``docs/reproductions/yamauchi*.md``: the prose that explains the experiment,
 its departure from the paper and what limits the result, every measured number filled in from
 the run."""
 
@@ -10,7 +10,15 @@ from pathlib import Path as FsPath
 
 from ..docs_page import command_line, copy_figures, figure_list, markdown_table, write_page
 from .report import markdown_rows
-from .settings import DEFAULT_SOIL, DEFAULT_VEHICLE, ENV_ID, page_name, world_of
+from .settings import (
+    DEFAULT_SOIL,
+    DEFAULT_VEHICLE,
+    ENV_ID,
+    REPRODUCTION_SOIL,
+    REPRODUCTION_VEHICLE,
+    page_name,
+    world_of,
+)
 
 CAPTIONS = {
     "fig4_endo_n": "Fig. 4 counterpart: Endo's n per tilt (log-log fit)",
@@ -77,23 +85,29 @@ LIMITS = LIMITS_HEAD + """
   faster than the law follows.
 """ + EXTRAPOLATION + """
 Issue 16 traces these limits to the track model (per-wheel slip states with no shear build-up
-along the track, no bulldozing resistance) and plans the physics that should let Endo's n and
-the targets emerge.
+along the track, no bulldozing resistance) and builds that physics: the reproduction now runs
+on the Wong-Chiang track model on a loose dry sand by default
+([yamauchi_wong_chiang.md](yamauchi_wong_chiang.md)); this page is the env preset's world,
+`--vehicle tracked_patako --soil toyoura_sand`.
 """
 """The limits of the env preset's world (per-wheel track law, `toyoura_sand`): its mechanism
 sentences were measured in that world."""
 
 LIMITS_MEASURED = LIMITS_HEAD + """
+- **Endo's n.** Eq. 8 has one n per tilt for both turning directions. Fitted per direction
+  (counter-clockwise turns the nose uphill, clockwise downhill) it is {n_by_direction}: on a
+  slope the tracks slip differently turning uphill and downhill, and the pooled n is a
+  compromise between the two.
 - **Odometry.** The true β leaves the slip-compensated odometry at {true_beta_ratio:.2f} of
-  gyrodometry (the fitted Eq. 9: {fitted_ratio:.2f}; the paper: 0.18, target ≤ 0.4). Endo's n
-  fitted per turning direction is {n_by_direction}.
+  gyrodometry (the fitted Eq. 9: {fitted_ratio:.2f}; the paper: 0.18, target ≤ 0.4): with a
+  perfect slip-angle regression what remains is Endo's slip ratios.{n_dir_sentence}{cm_sentence}
 - **Circle.** On the odometry with the true β the feed-forward changes the mean error by a
   factor {true_beta_ff:.2f} against feedback, and steered on the truth with the gains tuned on
   rigid ground by {truth_ff:.2f} (the target asks ≤ 0.5); the true slip angle of the turning
   vehicle swings by {swing:.0f}° (5-95 % range) around a lap.
 """ + EXTRAPOLATION + """
-This run measures the numbers, not the mechanisms behind them in this world; those measured
-for the per-wheel law on `toyoura_sand` are discussed in [yamauchi.md](yamauchi.md).
+The per-wheel law on `toyoura_sand` (the env preset's world) and the mechanisms measured there
+are discussed in [yamauchi.md](yamauchi.md).
 """
 """The limits of any other world: only what this run's numbers say."""
 
@@ -146,7 +160,11 @@ def world_details(vehicle: str | None, soil: str | None) -> str:
     if (v, s) == (DEFAULT_VEHICLE, DEFAULT_SOIL):
         return ""
     model = VEHICLE_MODELS.get(v)
-    return (f"The same experiments as [yamauchi.md](yamauchi.md), with the world changed:\n\n"
+    opening = ("The reproduction's default world (issue 16); the same experiments in the env "
+               "preset's world (per-wheel law on `toyoura_sand`) are on "
+               "[yamauchi.md](yamauchi.md)" if (v, s) == (REPRODUCTION_VEHICLE, REPRODUCTION_SOIL)
+               else "The same experiments as [yamauchi.md](yamauchi.md), with the world changed")
+    return (f"{opening}:\n\n"
             f"- vehicle `{v}`{': ' + model if model else ''};\n- {soil_sentence(s)}.")
 
 
@@ -172,6 +190,19 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
         truth_ff=lim["path_following"]["truth"]["feedforward_to_feedback_mean"],
         swing=lim["path_following"]["truth"]["feedback"]["slip_angle_swing_deg"],
     )
+    r2 = lim.get("endo_r2")
+    values["n_dir_sentence"] = "" if not r2 else (
+        " Eq. 8 with the fitted n explains R² = "
+        + ", ".join(f"{v:.2f} at {t}°" for t, v in r2.items())
+        + " of the true slips' log ratio against the log speed ratio: where it is low, the "
+        "ratio of the two tracks' slips does not follow a power of their speed ratio, and "
+        "Endo's odometry infers the wrong slips from the gyro.")
+    share = lim.get("endo_common_mode_share")
+    values["cm_sentence"] = "" if not share else (
+        " Of the training samples with both slips above 1 %, "
+        + ", ".join(f"{100 * v:.0f} % at {t}°" for t, v in share.items())
+        + " have true slips that break Eq. 8's sign rule (both tracks slipping the same way "
+        "relative to their belts, a common-mode slip a ratio of the two cannot express).")
     default = world_of(cfg.get("vehicle"), cfg.get("soil")) == (DEFAULT_VEHICLE, DEFAULT_SOIL)
     values["world"] = world_text(cfg.get("vehicle"), cfg.get("soil"))
     values["shipped"] = ((" and the one shipped\nin `slipenv/data`" if default else "")
@@ -191,7 +222,7 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
         SETUP.format(**values),
         "## Paper against simulation",
         markdown_table(("quantity", "paper", "simulation"), markdown_rows(result)),
-        f"Targets of issue 4: {met} of {len(m['targets_met'])} met.",
+        f"Targets (issue 4, and Endo's n of issue 16): {met} of {len(m['targets_met'])} met.",
         (LIMITS if default else LIMITS_MEASURED).format(**values),
         "## Figures", figure_list(figures, CAPTIONS),
     ]
@@ -199,12 +230,10 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
 
 
 def world_options(settings: dict) -> tuple[str, ...]:
-    """The ``--vehicle``/``--soil`` flags that select the run's world (none for the preset's)."""
-    opts: tuple[str, ...] = ()
-    for flag in ("vehicle", "soil"):
-        if settings.get(flag) is not None:
-            opts += (f"--{flag}", settings[flag])
-    return opts
+    """The ``--vehicle``/``--soil`` flags that select the run's world, always both (the
+    command's default world is not the env preset's: ``None`` is spelt out)."""
+    vehicle, soil = world_of(settings.get("vehicle"), settings.get("soil"))
+    return ("--vehicle", vehicle, "--soil", soil)
 
 
 def write_results_page(result: dict, figures: Sequence[str | FsPath],

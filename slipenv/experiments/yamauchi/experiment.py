@@ -17,13 +17,13 @@ from ..progress import iterate
 from ..results import write_json
 from . import model_file
 from .circle import circle_episode, mean_episodes
-from .docs import write_results_page
+from .docs import world_options, write_results_page
 from .odometry import odometry_errors
 from .paper import PAPER
 from .plots import save_figures
 from .report import format_table
 from .rotation import collect_runs, split_runs
-from .settings import QUICK, TARGETS, Settings
+from .settings import FULL, QUICK, TARGETS, Settings, is_env_world
 from .slips import fit_n, slip_run
 
 
@@ -62,6 +62,42 @@ def identify(cfg: Settings, train: list, test: list, geom) -> dict:
             "odometry_rmse_m": rmse, "true_beta_rmse_m": limit}
     return {"fits": fits, "samples": samples, "n_by_tilt": n_by_tilt,
             "n_by_direction": n_by_direction, "by_dir": by_dir}
+
+
+def common_mode_share(samples: dict, min_slip: float = 1e-2,
+                      min_speed_mps: float = 1e-3) -> float:
+    """Share of the rotation samples (both slips >= ``min_slip``, both track speeds >=
+    ``min_speed_mps``, as `fit_endo_n` uses) whose true slips break Eq. 8's sign rule
+    sgn(α_l/α_r) = -sgn(v_r v_l): both tracks slip the same way relative to their belts, a
+    common-mode slip that Endo's relation (a ratio of the two) cannot express."""
+    vl, vr = np.asarray(samples["v_l"]), np.asarray(samples["v_r"])
+    al, ar = np.asarray(samples["alpha_l"]), np.asarray(samples["alpha_r"])
+    with np.errstate(invalid="ignore"):
+        usable = (np.isfinite(al) & np.isfinite(ar) & (np.abs(al) >= min_slip)
+                  & (np.abs(ar) >= min_slip) & (np.abs(vl) >= min_speed_mps)
+                  & (np.abs(vr) >= min_speed_mps))
+        broken = usable & (np.sign(al * ar) != -np.sign(vl * vr))
+    return float(broken.sum() / max(int(usable.sum()), 1))
+
+
+def endo_r2(samples: dict, n: float, min_slip: float = 1e-2,
+            min_speed_mps: float = 1e-3) -> float:
+    """How much of the true slips' log ratio y = log|α_l/α_r| Eq. 8 explains with the fitted
+    n, y = n log|v_r/v_l|: R² = 1 - Σ(y - n x)² / Σ(y - ȳ)² over the samples `fit_endo_n`
+    uses (both slips and speeds large enough, Eq. 8's sign). 1: the two tracks' slips are a
+    power of their speed ratio, as Endo found; near 0: the ratio of the slips does not follow
+    the speed ratio, and Endo's odometry infers the wrong slips from the gyro."""
+    vl, vr = np.asarray(samples["v_l"]), np.asarray(samples["v_r"])
+    al, ar = np.asarray(samples["alpha_l"]), np.asarray(samples["alpha_r"])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        keep = (np.isfinite(al) & np.isfinite(ar) & (np.abs(al) >= min_slip)
+                & (np.abs(ar) >= min_slip) & (np.abs(vl) >= min_speed_mps)
+                & (np.abs(vr) >= min_speed_mps) & (np.sign(al * ar) == -np.sign(vl * vr)))
+        x = np.log(np.abs(vr[keep] / vl[keep]))
+        y = np.log(np.abs(al[keep] / ar[keep]))
+    if y.size < 2:
+        return float("nan")
+    return float(1.0 - np.sum((y - n * x) ** 2) / np.sum((y - y.mean()) ** 2))
 
 
 def follow_circle(cfg: Settings, sc_kwargs: dict, seed: int, progress: bool) -> tuple:
@@ -128,15 +164,23 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
     save_model : str, optional
         Also write the counter-clockwise model to this path (a maintainer refreshing
         ``slipenv/data/yamauchi_slip_model.json`` in a source checkout;
-        :func:`~.model_file.save_model` refuses an installed package).
+        :func:`~.model_file.save_model` refuses an installed package). Only in the env
+        preset's world (``vehicle="tracked_patako", soil="toyoura_sand"``), the one the
+        tracked env observes in.
     settings : Settings, optional
-        Overrides ``quick``.
+        Overrides ``quick``. By default :data:`~.settings.FULL` or :data:`~.settings.QUICK`,
+        the Wong-Chiang track model on ``dry_sand`` (issue 16); ``vehicle=None, soil=None``
+        (``Settings()``) is the env preset's per-wheel world.
     docs_dir : str, optional
         Write the results page ``docs_dir/yamauchi.md`` (figures copied beside it); in
         another world than the env preset's (``settings.vehicle``/``soil``),
         ``docs_dir/yamauchi_<world>.md`` (:func:`~.settings.page_name`).
     """
-    cfg = settings or (QUICK if quick else Settings())
+    cfg = settings or (QUICK if quick else FULL)
+    if save_model is not None and not is_env_world(cfg.vehicle, cfg.soil):
+        raise ValueError("save_model writes the model the tracked env observes with: run in "
+                         "its world (vehicle='tracked_patako', soil='toyoura_sand'), not "
+                         f"{cfg.vehicle} on {cfg.soil}")
     model_out = None if save_model is None else model_file.model_path(save_model)  # fail early
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
@@ -150,9 +194,10 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
     fits, n_by_tilt, by_dir = ident["fits"], ident["n_by_tilt"], ident["by_dir"]
     main = by_dir["ccw"]
     model, n_circle = main["model"], n_by_tilt[cfg.circle_tilt_deg]
+    flags = " ".join(world_options({"vehicle": cfg.vehicle, "soil": cfg.soil}))
     saved = model_file.model_record(model, n_circle, (
-        f"slipenv reproduce yamauchi{' --quick' if quick else ''} --seed {seed}: Eq. 9 on "
-        f"counter-clockwise rotation runs, Endo n at {cfg.circle_tilt_deg:g} deg"))
+        f"slipenv reproduce yamauchi {flags}{' --quick' if quick else ''} --seed {seed}: "
+        f"Eq. 9 on counter-clockwise rotation runs, Endo n at {cfg.circle_tilt_deg:g} deg"))
     (out / "slip_model.json").write_text(json.dumps(saved, indent=2))
     if model_out is not None:
         model_file.save_model(saved, model_out)
@@ -166,6 +211,9 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
             "slip_compensated": odo["slip_compensated"] / odo["gyrodometry"],
             "slip_compensated_true_beta": main["true_beta_rmse_m"] / odo["gyrodometry"]},
         "path_following": circle_limits,
+        "endo_common_mode_share": {f"{t:g}": common_mode_share(ident["samples"][t])
+                                   for t in cfg.tilts_deg},
+        "endo_r2": {f"{t:g}": endo_r2(ident["samples"][t], fits[t].n) for t in cfg.tilts_deg},
     }
     metrics = {
         "endo_n": {f"{t:g}": f.n for t, f in fits.items()},
@@ -183,7 +231,11 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
         "path_following": following,
         "limits": limits,
     }
+    n_paper = PAPER["endo_n"]
     metrics["targets_met"] = {
+        "endo_n_within_0.05_paper_at_each_tilt": all(
+            abs(f.n - n_paper[f"{t:g}"]) <= TARGETS["endo_n_tolerance"] for t, f in fits.items()
+            if f"{t:g}" in n_paper),
         "slip_compensated_rmse_le_0.4_gyrodometry":
             odo["slip_compensated"] <= TARGETS["odometry_ratio_max"] * odo["gyrodometry"],
         "feedforward_mean_le_0.5_feedback":

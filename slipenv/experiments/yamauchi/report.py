@@ -41,16 +41,38 @@ def table_rows(result: dict) -> list[tuple[str, str, str]]:
     rows.append(("circle RMSE improvement, Eq. 10 vs Eq. 9 (same odometry)", "-",
                  f"{100 * pf['rmse_improvement']:.0f} %"))
     lim = m["limits"]
+    by_dir = m.get("endo_n_by_direction") or {}
+    for t in m["endo_n"]:
+        up, down = by_dir.get(f"{t}_ccw"), by_dir.get(f"{t}_cw")
+        if t == "0" or up is None or down is None:
+            continue
+        rows.append((f"limit: Endo n, tilt {t}°, fitted turning uphill / downhill "
+                     "(Eq. 8 has one n for both)", "-", f"{up:.2f} / {down:.2f}"))
+    share = lim.get("endo_common_mode_share")
+    if share:
+        rows.append(("limit: training samples whose true slips break Eq. 8's sign (both "
+                     "tracks slip the same way), tilt " + "/".join(f"{t}" for t in share)
+                     + "°", "-", " / ".join(f"{100 * v:.0f} %" for v in share.values())))
     rows.append(("limit: slip-compensated with the true β, RMSE / gyrodometry", "-",
                  f"{lim['odometry_ratio_to_gyrodometry']['slip_compensated_true_beta']:.2f}"
-                 f" (Eq. 9: {lim['odometry_ratio_to_gyrodometry']['slip_compensated']:.2f})"))
+                 f" (Eq. 9: {lim['odometry_ratio_to_gyrodometry']['slip_compensated']:.2f};"
+                 " the rest is Endo's slip ratios)"))
+    r2 = lim.get("endo_r2")
+    if r2:
+        rows.append(("limit: R² of Eq. 8 (log slip ratio against n log speed ratio) on the "
+                     "true slips, tilt " + "/".join(f"{t}" for t in r2) + "°", "-",
+                     " / ".join(f"{v:.2f}" for v in r2.values())))
     for mode, label in (("true_beta", "odometry with the true β"),
                         ("truth", "steering on the true pose and β")):
         pair = lim["path_following"][mode]
+        swing = pair["feedback"].get("slip_angle_swing_deg")
+        rest = (" the rest is the odometry's error" if mode == "true_beta" else
+                f" rigid-ground gains, true β swings {swing:.0f}° a lap"
+                if swing is not None else "")
         rows.append((f"limit: circle 15°, {label}: mean error Eq. 9 -> Eq. 10 [cm]", "-",
                      f"{100 * pair['feedback']['mean_error_m']:.1f} -> "
                      f"{100 * pair['feedforward']['mean_error_m']:.1f} "
-                     f"(ratio {pair['feedforward_to_feedback_mean']:.2f})"))
+                     f"(ratio {pair['feedforward_to_feedback_mean']:.2f};{rest})"))
     rows += [(f"target: {k}", "", "met" if v else "NOT met") for k, v in m["targets_met"].items()]
     return rows
 
