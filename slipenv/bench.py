@@ -38,14 +38,23 @@ Three more figures per env (issue 15):
   ~0.3 µs per call, so this rollout is not the one the ratio is taken from.
 * ``vec_env_steps_per_s``: total env steps/s of ``gymnasium.make_vec(id, VEC_PROCESSES,
   vectorization_mode="async")`` (one env per process, constant action, after a warm-up).
+
+And once per run, ``startup``: what a user waits for before the first step, each env in a
+fresh interpreter (:func:`startup_cost`): ``import slipenv`` (median over the envs) and per env
+the first ``make`` + ``reset`` + ``step``, and which compiled kernels were loaded (the wheel-soil
+loop, ``slipenv.sim.compiled``; the Lindgren EKF, ``slipenv.estimators.lindgren``). Nothing is
+compiled at import or at the first step: ``pip install`` builds the kernels.
 """
 
 from __future__ import annotations
 
 import contextlib
+import json
 import logging
 import platform
 import statistics
+import subprocess
+import sys
 import time
 import warnings
 from collections import Counter
@@ -368,6 +377,43 @@ def collected_warnings() -> Iterator[Counter]:
         logging.lastResort = saved
 
 
+_STARTUP_SCRIPT = """
+import json, sys, time
+t0 = time.perf_counter()
+import slipenv
+t1 = time.perf_counter()
+import gymnasium as gym
+env = gym.make(sys.argv[1])
+env.reset(seed=0)
+env.step(env.action_space.sample() * 0)
+t2 = time.perf_counter()
+env.close()
+from slipenv.estimators.lindgren.ekf import compiled_available
+from slipenv.sim.compiled import wheel_loop_module
+print(json.dumps({"import_s": t1 - t0, "first_make_s": t2 - t1, "compiled": {
+    "wheel_loop": wheel_loop_module() is not None, "lindgren_ekf": compiled_available()}}))
+"""
+
+
+def startup_cost(env_ids: list[str]) -> dict:
+    """``import slipenv`` and each env's first ``make`` + ``reset`` + ``step``, each env in a
+    fresh interpreter [s], and which compiled kernels were loaded (see the module docstring).
+
+    Returns
+    -------
+    dict
+        ``{"import_s": median, "first_make_s": {id: s}, "compiled": {kernel: bool}}``.
+    """
+    runs = {}
+    for env_id in env_ids:
+        out = subprocess.run([sys.executable, "-c", _STARTUP_SCRIPT, env_id], check=True,
+                             capture_output=True, text=True)
+        runs[env_id] = json.loads(out.stdout.strip().splitlines()[-1])
+    return {"import_s": round(statistics.median(r["import_s"] for r in runs.values()), 3),
+            "first_make_s": {k: round(r["first_make_s"], 3) for k, r in runs.items()},
+            "compiled": next(iter(runs.values()))["compiled"] if runs else {}}
+
+
 def run_bench(env_ids: list[str], steps: int = 200, repeats: int = 5,
               progress: bool = True, vec: bool = True) -> dict:
     """Benchmark every id.
@@ -395,6 +441,7 @@ def run_bench(env_ids: list[str], steps: int = 200, repeats: int = 5,
                      "coulomb_mu": round(COULOMB_MU_PER_BODY**2, 4),
                      "vec_processes": VEC_PROCESSES if vec else 0},
         "warnings": {"count": sum(caught.values()), "messages": dict(caught.most_common())},
+        "startup": startup_cost(env_ids),
     }
 
 
@@ -426,6 +473,14 @@ def format_bench(result: dict) -> str:
         lines += ["", head2, "-" * len(head2)]
         for env_id, b in rows:
             lines.append(f"{env_id:<32}" + "".join(f" {b[k]:>10.1f}" for k in BREAKDOWN_KEYS))
+    start = result.get("startup")
+    if start:
+        slowest = max(start["first_make_s"].items(), key=lambda kv: kv[1])
+        kernels = ", ".join(f"{k} {'compiled' if v else 'Python'}"
+                            for k, v in start["compiled"].items())
+        lines += ["", f"startup: import slipenv {start['import_s']:.2f} s; first make + reset + "
+                  f"step {min(start['first_make_s'].values()):.2f}-{slowest[1]:.2f} s "
+                  f"(slowest {slowest[0]}); {kernels}"]
     caught = result.get("warnings", {})
     if caught.get("count"):
         first = next(iter(caught["messages"]))

@@ -27,9 +27,13 @@ def test_bench_writes_the_documented_json_schema(tmp_path):
     path = tmp_path / "bench.json"
     assert main(["bench", "slipenv/HuskySand-v0", "--steps", "20", "--repeats", "1",
                  "--quiet", "--json", str(path)]) == 0
-    entry = json.loads(path.read_text())["envs"]["slipenv/HuskySand-v0"]
+    doc = json.loads(path.read_text())
+    entry = doc["envs"]["slipenv/HuskySand-v0"]
     for key in ("env_steps_per_s", "substeps_per_step", "bare_substeps_per_s", "ratio"):
         assert entry[key] > 0
+    start = doc["startup"]  # measured in a fresh interpreter: import, then the first step
+    assert 0 < start["import_s"] < start["first_make_s"]["slipenv/HuskySand-v0"] + 5
+    assert set(start["compiled"]) == {"wheel_loop", "lindgren_ekf"}
     expected = entry["env_steps_per_s"] * entry["substeps_per_step"] / entry["bare_substeps_per_s"]
     assert entry["ratio"] == round(expected, 3) or abs(entry["ratio"] - expected) < 2e-3
 

@@ -56,11 +56,14 @@ def test_bench_collects_estimator_warnings_and_reports_their_count(monkeypatch, 
                 "bare_substeps_per_s": 4000.0, "ratio": 0.3, "realtime_factor": 5.0}
 
     monkeypatch.setattr(bench, "bench_env", noisy)
+    monkeypatch.setattr(bench, "startup_cost", lambda ids: {
+        "import_s": 0.2, "first_make_s": dict.fromkeys(ids, 0.6), "compiled": {}})
     assert main(["bench", ENV, "slipenv/FarmField-v0", "--quiet"]) == 0
     out, err = capsys.readouterr()
     assert "skipping measurement" not in err and "gains are marginal" not in err
     table, last = out.strip().splitlines()[:-1], out.strip().splitlines()[-1]
-    assert len(table) == 4  # header, rule, two envs: nothing interleaved
+    # header, rule, two envs, then the start-up line: nothing interleaved
+    assert len(table) == 6 and table[5].startswith("startup: import slipenv 0.20 s")
     assert last.startswith("4 warning(s) during the benchmark, 2 distinct")
 
 
