@@ -8,6 +8,11 @@ set value; for the other effects, whose effective value the vehicle's own dynami
 little, the value fitted on a long noise-free calibration run of the same world), the median
 relative error against the value set in the physics where there is one, and timings.
 
+``--vehicles`` generates ``--n`` logs on each listed generator vehicle (``synth.VEHICLES``:
+``diff_drive`` farm robot, ``skid_steer`` four-wheel skid-steer, ``tracked`` Patako's tracked
+vehicle, ``rover4ws`` 4WD/4WS rover), each effect hidden on it equally often, and adds the
+effect x vehicle table.
+
 The generator's seeds change every run (printed; pass ``--seed`` to repeat a run).
 
 ``--kinematic N`` also runs the kinematic generator (``slipenv.diagnose.kinematic``: correlated
@@ -23,6 +28,8 @@ track; both must be named) and a clean log (no false alarm), and prints the tabl
 mean diagnosis time.
 
     python benchmarks/diagnose_hit_rate.py --n 40 --duration 120 --jobs 2
+    python benchmarks/diagnose_hit_rate.py --n 16 --duration 120 --jobs 1 \\
+        --vehicles diff_drive,skid_steer,tracked,rover4ws
     python benchmarks/diagnose_hit_rate.py --n 0 --kinematic 30 --duration 120
     python benchmarks/diagnose_hit_rate.py --n 0 --kinds 5 --lengths 60,120,300
 """
@@ -37,20 +44,22 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from slipenv.diagnose.synth import GENERATED
+from slipenv.diagnose.synth import KINDS as HIDDEN_ON
 
 Z_LIMIT = 3.0  # |estimate - truth| <= 3 standard errors counts as recovered
 
 
-def run_one(job: tuple[int, str, float]) -> dict:
-    """Generate and diagnose one log; the outcome as a dict."""
+def run_one(job: tuple) -> dict:
+    """Generate and diagnose one log (``(seed, effect, duration[, vehicle])``); the outcome."""
     from slipenv.diagnose import replay
     from slipenv.diagnose.fit import Problem
     from slipenv.diagnose.select import select
     from slipenv.diagnose.synth import generate
 
-    seed, effect, duration = job
+    seed, effect, duration = job[:3]
+    vehicle = job[3] if len(job) > 3 else None
     t0 = time.perf_counter()
-    synth = generate(seed, effect, duration_s=duration)
+    synth = generate(seed, effect, vehicle, duration_s=duration)
     t1 = time.perf_counter()
     seg = replay.build_segments([synth.log])
     sel = select(Problem.from_segments(seg), logs=[synth.log])
@@ -65,7 +74,8 @@ def run_one(job: tuple[int, str, float]) -> dict:
              if k in rep}
         rel = {k: abs(rep[k][0] / v - 1.0) for k, v in synth.world.items()
                if k in rep and isinstance(v, float) and v != 0 and not k.startswith("patch_c")}
-    return {"seed": seed, "effect": effect, "kind": synth.log.meta.kind, "cause": sel.cause,
+    return {"seed": seed, "effect": effect, "kind": synth.log.meta.kind,
+            "vehicle": vehicle or synth.log.meta.kind, "cause": sel.cause,
             "also": sel.also, "z": z, "rel": rel, "gen_s": t1 - t0, "diag_s": t2 - t1,
             "columns": [c for c in synth.log.columns if not c.startswith(("enc_", "gt_"))]}
 
@@ -95,6 +105,33 @@ def table(results: list[dict]) -> str:
     rows.append(f"| **all** | {len(results)} | {hits} | {100 * hits / len(results):.0f} % | "
                 f"{alarms}/{len(clean)} | | | "
                 f"{np.mean([r['diag_s'] for r in results]):.1f} s |")
+    return "\n".join(rows)
+
+
+def vehicle_table(results: list[dict], vehicles: list[str]) -> str:
+    """Effect x vehicle table (markdown): named right / logs; false alarms on clean logs."""
+    head = " | ".join(vehicles)
+    rows = [f"| effect | {head} |", "|---|" + "---|" * len(vehicles)]
+    for effect in GENERATED:
+        if not any(r["effect"] == effect for r in results):
+            continue
+        cells = []
+        for v in vehicles:
+            rs = [r for r in results if r["effect"] == effect and r["vehicle"] == v]
+            if not rs:
+                cells.append("–")
+            elif effect == "none":
+                alarms = sum(r["cause"] != "none" for r in rs)
+                cells.append(f"{len(rs) - alarms}/{len(rs)} ({alarms} false alarms)")
+            else:
+                cells.append(f"{sum(r['cause'] == effect for r in rs)}/{len(rs)}")
+        rows.append(f"| {effect} | {' | '.join(cells)} |")
+    cells = []
+    for v in vehicles:
+        rs = [r for r in results if r["vehicle"] == v]
+        cells.append(f"**{sum(r['cause'] == r['effect'] for r in rs)}/{len(rs)}**, "
+                     f"{np.mean([r['diag_s'] for r in rs]):.1f} s" if rs else "–")
+    rows.append(f"| **all** (mean diagnosis time) | {' | '.join(cells)} |")
     return "\n".join(rows)
 
 
@@ -199,6 +236,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=int, default=2, help="worker processes")
     parser.add_argument("--effects", default=",".join(GENERATED),
                         help="comma-separated effects to draw from (default: all generated)")
+    parser.add_argument("--vehicles", default=None,
+                        help="comma-separated generator vehicles (synth.VEHICLES labels: "
+                             "diff_drive, skid_steer, tracked, rover4ws): --n logs per "
+                             "vehicle, effects drawn among those hidden on it, and the "
+                             "effect x vehicle table (default: one random vehicle per log)")
     parser.add_argument("--kinematic", type=int, default=0,
                         help="seeds per case of the kinematic generator (default 0: skip)")
     parser.add_argument("--kinds", type=int, default=0,
@@ -216,22 +258,30 @@ def main(argv: list[str] | None = None) -> int:
     base = args.seed if args.seed is not None else int.from_bytes(os.urandom(3), "little")
     effects = args.effects.split(",")
     rng = np.random.default_rng(base)
-    # every effect equally often (clean logs included), in random order
-    draws = [effects[i % len(effects)] for i in range(args.n)]
-    rng.shuffle(draws)
-    jobs = [(base * 1000 + i, e, args.duration) for i, e in enumerate(draws)]
-    print(f"base seed {base}: {args.n} logs of {args.duration:g} s, effects {effects}", flush=True)
+    vehicles = args.vehicles.split(",") if args.vehicles else [None]
+    jobs = []
+    for v in vehicles:
+        # every effect hidden on the vehicle equally often (clean logs included), random order
+        mine = [e for e in effects if v is None or v in HIDDEN_ON[e]]
+        draws = [mine[i % len(mine)] for i in range(args.n)]
+        rng.shuffle(draws)
+        jobs += [(base * 1000 + len(jobs) + i, e, args.duration, v) for i, e in enumerate(draws)]
+    print(f"base seed {base}: {args.n} logs of {args.duration:g} s per vehicle "
+          f"{vehicles}, effects {effects}", flush=True)
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         results = []
         for r in pool.map(run_one, jobs):
             flag = "ok " if r["cause"] == r["effect"] else "MISS"
             zs = " ".join(f"{k}={v:+.1f}" for k, v in r["z"].items())
-            print(f"{flag} seed {r['seed']} {r['kind']:10s} {r['effect']:15s} -> {r['cause']}"
+            print(f"{flag} seed {r['seed']} {r['vehicle']:10s} {r['effect']:15s} -> {r['cause']}"
                   f"{'+' + '+'.join(r['also']) if r['also'] else ''}  [{r['diag_s']:.1f} s]"
                   f"  {zs}", flush=True)
             results.append(r)
     print()
     print(table(results))
+    if args.vehicles:
+        print()
+        print(vehicle_table(results, vehicles))
     return 0
 
 

@@ -35,9 +35,9 @@ from slipenv.vehicles.spec import VehicleSpec, WheelSpec
 p = import_pybullet()  # the banner-free first import (see slipenv.pybullet_quiet)
 
 REPLAY_S = 60.0  # [s] of log replayed in PyBullet for the report
-RIGID_LAW = {"diff_drive": "reina", "skid_steer": "janosi"}
-RIGID_LONG = {"diff_drive": 30.0, "skid_steer": 5.0}
-RIGID_LAT = {"diff_drive": 5.0, "skid_steer": 1.0}
+RIGID_LAW = {"diff_drive": "reina", "skid_steer": "janosi", "rover4ws": "reina"}
+RIGID_LONG = {"diff_drive": 30.0, "skid_steer": 5.0, "rover4ws": 30.0}
+RIGID_LAT = {"diff_drive": 5.0, "skid_steer": 1.0, "rover4ws": 5.0}
 
 
 def rigid_ground(kind: str, lat_scale: float = 1.0) -> ScaledSlip:

@@ -1,7 +1,8 @@
 """Hidden-effect logs from the PyBullet simulation, for testing the diagnosis against physics.
 
 :func:`generate` drives a simulated vehicle (Lindgren's ``farm_2wd`` for ``diff_drive``, the
-symmetric four-wheel :func:`skid4` for ``skid_steer``) between random waypoints on rigid,
+symmetric four-wheel :func:`skid4` for ``skid_steer``, Patako's tracked vehicle for
+``tracked``, Reina's 4WD/4WS rover for ``rover4ws``) between random waypoints on rigid,
 level or sloped ground, and exports the run as a slipenv-log/1 log whose ``meta.json`` holds
 the *nominal* model. One effect of random size is hidden in the *physics* of the world (never
 in the kinematic model the diagnosis fits), or none. How each effect is hidden — on which
@@ -16,6 +17,14 @@ no side force), which is not Yamauchi's side slip, so slopes with side slip are 
 only. ``combined_slip`` is not generated: on these vehicles a slip angle comes only with side
 slip, so it never appears alone. About 30 % of the differential-drive logs stand on a 5-12°
 slope, except where the effect's ``Hiding`` says otherwise.
+
+The rover (``rover4ws``) carries rolling-radius, track-width and gyro errors. Its steering
+fixes the turn (each wheel points along its arc about the commanded centre), so a left/right
+radius difference shows mostly as wheels fighting each other (longitudinal slip), less as
+heading drift than on a differential drive. Its PyBullet body's yaw rate chatters between
+control steps, and the gyro model samples the instantaneous rate at the control rate, so a
+noise-free gyro's integral misses the rover's turn by several per cent: a gyro offset below
+that is not identifiable on these logs (a limit of the simulated sensor, not of the diagnosis).
 
 A skid-steer vehicle never turns as its wheel spacing says (the wheels scrub), so its nominal
 track width is the *effective* one, fitted on a long run of the clean world — as an operator
@@ -49,7 +58,7 @@ from slipenv.sensors.onboard import SensorSuite
 from slipenv.sim.simulator import Simulator
 from slipenv.terrain.terrain import TerrainSpec
 from slipenv.vehicles.kinematics import twist_to_commands
-from slipenv.vehicles.presets import farm_2wd
+from slipenv.vehicles.presets import farm_2wd, rover_4ws, tracked_patako
 from slipenv.vehicles.spec import VehicleSpec, WheelSpec
 
 
@@ -76,13 +85,22 @@ def skid4() -> VehicleSpec:
         counts_per_rad=285.0)
 
 
-VEHICLES = {"diff_drive": farm_2wd, "skid_steer": skid4}
+VEHICLES = {"diff_drive": farm_2wd, "skid_steer": skid4, "tracked": tracked_patako,
+            "rover4ws": rover_4ws}
+"""The generator's vehicles by label: the label is the vehicle's kind, except ``tracked``
+(Patako's tracked vehicle, road wheels under each track: a second skid-steer vehicle)."""
+PHYSICAL_KIND = {label: make().kind for label, make in VEHICLES.items()}
+"""The vehicle kind (``VehicleSpec.kind``) of each label: what an effect's ``Hiding.kinds``,
+the force law of rigid ground and the diagnosis go by."""
 GENERATED = ("none", *(name for name, e in EFFECTS.items() if e.hiding is not None))
 KINDS = {"none": tuple(VEHICLES)} | {
-    name: EFFECTS[name].hiding.kinds for name in GENERATED[1:]}
-"""Vehicle kinds each effect is hidden on (its module's ``Hiding.kinds``)."""
-ARENA_M = {"diff_drive": 5.0, "skid_steer": 3.5}  # half-size of the waypoint box [m]
-MAX_TURN_RATIO = {"diff_drive": 0.8, "skid_steer": 0.35}  # |v_r - v_l| / |v_r + v_l| limit
+    name: tuple(label for label in VEHICLES if PHYSICAL_KIND[label] in EFFECTS[name].hiding.kinds)
+    for name in GENERATED[1:]}
+"""Vehicle labels each effect is hidden on (those whose kind is in its ``Hiding.kinds``)."""
+ARENA_M = {"diff_drive": 5.0, "skid_steer": 3.5,  # half-size of the waypoint box [m]
+           "tracked": 2.0, "rover4ws": 2.0}  # (the 0.3 m/s vehicles: a smaller box)
+MAX_TURN_RATIO = {"diff_drive": 0.8, "skid_steer": 0.35,  # |v_r - v_l| / |v_r + v_l| limit
+                  "tracked": 0.35, "rover4ws": 0.8}
 CALIBRATION_S = 150.0  # [s] length of the noise-free calibration runs
 EXACT = {kind: tuple(name for name in GENERATED[1:] if EFFECTS[name].hiding.exact
                     and kind in KINDS[name]) for kind in VEHICLES}
@@ -124,7 +142,8 @@ def base_config(kind: str, slope_deg: float = 0.0, azimuth_deg: float = 0.0,
     terrain = (TerrainSpec(kind="slope", slope_deg=slope_deg, downhill_azimuth_deg=azimuth_deg,
                            size_m=60.0) if slope_deg else TerrainSpec())
     return SlipEnvConfig(vehicle=VEHICLES[kind](), terrain=terrain, soil="concrete",
-                         force_model=rigid_ground(kind), sensor_noise=noise or SensorNoise())
+                         force_model=rigid_ground(PHYSICAL_KIND[kind]),
+                         sensor_noise=noise or SensorNoise())
 
 
 def hidden_world(kind: str, name: str, rng: np.random.Generator,
@@ -142,7 +161,7 @@ def hidden_world(kind: str, name: str, rng: np.random.Generator,
     slope = 0.0
     if hiding is not None and hiding.slope_deg is not None:
         slope = float(rng.uniform(*hiding.slope_deg))
-    elif (kind == "diff_drive" and (hiding is None or hiding.random_slope)
+    elif (PHYSICAL_KIND[kind] == "diff_drive" and (hiding is None or hiding.random_slope)
           and rng.random() < 0.3):
         slope = float(rng.uniform(5.0, 12.0))
     azimuth = float(rng.uniform(-180.0, 180.0))
@@ -151,7 +170,8 @@ def hidden_world(kind: str, name: str, rng: np.random.Generator,
     if hiding is None:
         return cfg, {}, world
     spec = make_vehicle(cfg.vehicle)
-    ctx = DrawContext(kind, spec, ARENA_M[kind], focus, lambda: typical_torque_nm(kind))
+    ctx = DrawContext(PHYSICAL_KIND[kind], spec, ARENA_M[kind], focus,
+                      lambda: typical_torque_nm(kind))
     hidden = hiding.draw(rng, ctx)
     if hidden.slip_options:
         world.update(hidden.slip_options)
@@ -198,6 +218,7 @@ def drive(cfg: SlipEnvConfig, kind: str, rng: np.random.Generator, duration_s: f
     if meta_track_m is not None:
         meta.data["vehicle"]["track_width_m"] = meta_track_m
     rec = LogRecorder(meta, columns)
+    steered = any(w.steered for w in nominal.wheels)  # the log holds the steering angles
     sloped = cfg.terrain.kind == "slope"
     arena = ARENA_M[kind] * (2.0 if sloped else 1.0)  # slopes: long legs, gentle turns
     turn_ratio = MAX_TURN_RATIO[kind] * (0.4 if sloped else 1.0)
@@ -224,10 +245,17 @@ def drive(cfg: SlipEnvConfig, kind: str, rng: np.random.Generator, duration_s: f
             w_cmd += float(np.clip(omega - w_cmd, -dw, dw))  # drive's ramps would give
             speeds, steer = twist_to_commands(nominal, v_cmd, w_cmd)
             truth = sim.step(speeds, steer)
-            rec.record(sensors.measure(truth, rng), _pose(truth), speeds)
+            rec.record(sensors.measure(truth, rng), _pose(truth), speeds,
+                       _channel_steer(nominal, steer) if steered else None)
     finally:
         sim.close()
     return _Drive(rec.to_log(), spec)
+
+
+def _channel_steer(spec: VehicleSpec, steer: list[float]) -> list[float]:
+    """Commanded steering angle per channel [rad] (rover4ws channels are wheels)."""
+    by_channel = {w.channel: a for w, a in zip(spec.wheels, steer, strict=True)}
+    return [by_channel.get(c, 0.0) for c in spec.channels]
 
 
 def _pose(truth) -> tuple[float, float, float]:
@@ -264,7 +292,7 @@ def calibrate(cfg: SlipEnvConfig, kind: str, effects: tuple[str, ...],
 def effective_track_m(kind: str, slope_deg: float = 0.0, azimuth_deg: float = 0.0) -> float:
     """Nominal track width of the log's meta: geometric (diff-drive) or calibrated (skid)."""
     spec = VEHICLES[kind]()
-    if kind == "diff_drive":
+    if PHYSICAL_KIND[kind] == "diff_drive":
         return spec.track_width_m
     return calibrate(base_config(kind), kind, ("track_width",))["track_width_m"][0]
 
@@ -280,7 +308,8 @@ def generate(seed: int, effect: str | None = None, kind: str | None = None,
     effect : str, optional
         One of ``GENERATED``; random if None.
     kind : str, optional
-        ``diff_drive`` or ``skid_steer``; random if None (turning slip forces skid-steer).
+        A label of ``VEHICLES`` (``diff_drive``, ``skid_steer``, ``tracked``, ``rover4ws``);
+        random among those the effect is hidden on (``KINDS``) if None.
     duration_s : float
         Log length [s] at 20 Hz.
     columns : iterable of str, optional

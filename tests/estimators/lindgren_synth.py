@@ -47,6 +47,22 @@ class SynthRun:
     frames: list[SensorFrame]
 
 
+def truth0() -> np.ndarray:
+    """The 13-state truth the synthetic runs start from: the farm vehicle's soil radii
+    (0.283 / 0.287 m) and a stiffer soil than the filter's prior."""
+    x0 = np.zeros(lm.N_SLIP)
+    x0[[lm.IX, lm.IY]] = (-8.0, -4.0)
+    x0[lm.IRL:lm.IRR + 1] = (0.283, 0.287)
+    x0[lm.IKL:] = (2500.0, 2200.0)
+    return x0
+
+
+def torque(t: float, x: np.ndarray) -> np.ndarray:
+    """Varying drive torque, more on the outer wheel in turns [N m]."""
+    base = 150.0 + 100.0 * math.sin(2.0 * math.pi * t / 7.0)
+    return np.array([base - 300.0 * x[lm.IOM], base + 300.0 * x[lm.IOM]])
+
+
 def straight_and_turn(
     speed_mps: float = 1.0, radius_m: float = 4.0, straight_s: float = 8.0
 ) -> Callable[[float], tuple[float, float]]:

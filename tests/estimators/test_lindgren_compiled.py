@@ -15,8 +15,6 @@ and BLAS builds, and is still five orders of magnitude below any filtering effec
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
@@ -27,7 +25,7 @@ from slipenv.estimators.lindgren import ekf as ekf_module
 from slipenv.estimators.lindgren import models as lm
 from slipenv.estimators.lindgren.ekf import LindgrenEKF, LindgrenNoise, OracleSoil
 from slipenv.sensors.beacons import BeaconScanner, default_beacons_xy
-from tests.estimators.lindgren_synth import simulate, straight_and_turn
+from tests.estimators.lindgren_synth import simulate, straight_and_turn, torque, truth0
 
 pytestmark = pytest.mark.skipif(not ekf_module.compiled_available(),
                                 reason="the _ekf extension is not built")
@@ -35,20 +33,6 @@ pytestmark = pytest.mark.skipif(not ekf_module.compiled_available(),
 BOUND = 1e-9  # relative agreement of the compiled kernel with the numpy reference
 GEOM = OdometryGeometry(wheel_radius_m=0.275, track_width_m=1.5, counts_per_rad=285.0)
 FARMFIELD_STEPS = 3400  # FarmField-v0: max_episode_s = 170 at 20 Hz
-
-
-def truth0() -> np.ndarray:
-    x0 = np.zeros(lm.N_SLIP)
-    x0[[lm.IX, lm.IY]] = (-8.0, -4.0)
-    x0[lm.IRL:lm.IRR + 1] = (0.283, 0.287)
-    x0[lm.IKL:] = (2500.0, 2200.0)
-    return x0
-
-
-def torque(t: float, x: np.ndarray) -> np.ndarray:
-    """Varying drive torque, more on the outer wheel in turns [N m]."""
-    base = 150.0 + 100.0 * math.sin(2.0 * math.pi * t / 7.0)
-    return np.array([base - 300.0 * x[lm.IOM], base + 300.0 * x[lm.IOM]])
 
 
 @pytest.fixture(scope="module")

@@ -23,7 +23,7 @@ from slipenv.estimators.lindgren.ekf import (
     parse_scheme,
 )
 from slipenv.sensors.beacons import BeaconScanner, default_beacons_xy
-from tests.estimators.lindgren_synth import simulate, straight_and_turn
+from tests.estimators.lindgren_synth import simulate, straight_and_turn, torque, truth0
 
 GEOM = OdometryGeometry(wheel_radius_m=0.275, track_width_m=1.5, counts_per_rad=285.0)
 CROSS = np.array([[10.0, 0.0], [0.0, 10.0], [-10.0, 0.0], [0.0, -10.0]])
@@ -32,20 +32,6 @@ CROSS = np.array([[10.0, 0.0], [0.0, 10.0], [-10.0, 0.0], [0.0, -10.0]])
 def frame(t: float, counts=(0.0, 0.0), torque=(0.0, 0.0), **kw) -> SensorFrame:
     return SensorFrame(t_s=t, enc_counts=np.array(counts, dtype=float),
                        wheel_torque_nm=np.array(torque, dtype=float), **kw)
-
-
-def truth0() -> np.ndarray:
-    x0 = np.zeros(lm.N_SLIP)
-    x0[[lm.IX, lm.IY]] = (-8.0, -4.0)
-    x0[lm.IRL:lm.IRR + 1] = (0.283, 0.287)
-    x0[lm.IKL:] = (2500.0, 2200.0)
-    return x0
-
-
-def torque(t: float, x: np.ndarray) -> np.ndarray:
-    """Varying drive torque, more on the outer wheel in turns [N m]."""
-    base = 150.0 + 100.0 * math.sin(2.0 * math.pi * t / 7.0)
-    return np.array([base - 300.0 * x[lm.IOM], base + 300.0 * x[lm.IOM]])
 
 
 def synthetic(n_steps: int, seed: int = 3):

@@ -61,5 +61,6 @@ EFFECT = Effect(
     meaning="constant offset in the yaw-rate sensor",
     params=GyroBias, bounds=bounds, apply=apply, rank=8, applicable=applicable,
     channel="gyro", contract=(Scalar("bias_rad_s", "gyro_bias_rad_s"),),
-    hiding=Hiding(("diff_drive", "skid_steer"), draw, columns=frozenset({"imu"}), exact=True),
+    hiding=Hiding(("diff_drive", "skid_steer", "rover4ws"), draw, columns=frozenset({"imu"}),
+                  exact=True),
 )

@@ -70,5 +70,5 @@ EFFECT = Effect(
     meaning="effective rolling radius differs from nominal (per wheel)",
     params=RollingRadius, bounds=bounds, start=start, apply=apply, rank=1,
     contract=(PerSide("left_m", "right_m", "radius_{w}_m"),),
-    hiding=Hiding(("diff_drive", "skid_steer"), draw),
+    hiding=Hiding(("diff_drive", "skid_steer", "rover4ws"), draw),
 )

@@ -71,5 +71,5 @@ EFFECT = Effect(
     meaning="effective distance between the contact lines differs from nominal",
     params=TrackWidth, bounds=bounds, start=start, apply=apply, rank=2,
     contract=(Scalar("width_m", "track_width_m"),),
-    hiding=Hiding(("diff_drive", "skid_steer"), draw),
+    hiding=Hiding(("diff_drive", "skid_steer", "rover4ws"), draw),
 )
