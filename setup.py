@@ -2,7 +2,8 @@
 
 Everything else about the package is in pyproject.toml. Each extension is optional: if it does
 not compile, installation goes on and slipenv runs the same physics in plain Python (the
-reference the compiled kernels are tested against bit-for-bit; `slipenv.sim.compiled`).
+reference the compiled kernels are tested against: `slipenv.sim.compiled`,
+``SLIPENV_PURE_PYTHON``).
 ``-ffp-contract=off`` keeps the compiler from fusing a*b+c into one rounding, so the C
 arithmetic rounds exactly as Python's does.
 """
@@ -15,6 +16,7 @@ setup(
     ext_modules=[
         Extension("slipenv.sim._wheel_loop", ["slipenv/sim/_wheel_loop.c"],
                   extra_compile_args=_FLAGS, optional=True),
-        Extension("slipenv.estimators.lindgren._ekf", ["estimators/lindgren/_ekf.c"], extra_compile_args=_FLAGS, optional=True),  # noqa: E501
+        Extension("slipenv.estimators.lindgren._ekf", ["estimators/lindgren/_ekf.c"],
+                  extra_compile_args=_FLAGS, optional=True),
     ],
 )

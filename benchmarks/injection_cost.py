@@ -13,7 +13,8 @@ other processes hits all alike), in microseconds per physics substep:
   (the spin joints);
 * ``apply_external_force``: one call's cost times the calls per substep actually made (counted
   in the in-situ loop);
-* ``python``: apply_total minus the queries and the force calls (the arithmetic in Python).
+* ``compute``: apply_total minus the queries and the force calls: the frame, slip and force
+  law, compiled (``slipenv/sim/_wheel_loop.c``) or, with ``SLIPENV_PURE_PYTHON=1``, in Python.
 
 and, for deciding what to cut, alternatives (``alt_*``, not part of the sum): link states
 without velocities (one call), the three queries with keyword arguments (their sum, as the
@@ -52,25 +53,29 @@ def _per_call_us(fn: Callable[[], object], calls: int) -> float:
     return (time.perf_counter() - t0) / calls * 1e6
 
 
+def _forces_applied(injector) -> int:
+    """``applyExternalForce`` calls the last substep made (the loop's rule: a loaded driven
+    wheel applies its shear, and every loaded wheel its resistance unless it is zero)."""
+    state = injector.contact_state()
+    return sum(int(load > 0.0) * (int(driven) + int(res != 0.0)) for load, driven, res in
+               zip(state.load_n, injector.driven, state.resistance_n, strict=True))
+
+
 def _in_situ(env: gym.Env, action: np.ndarray, steps: int) -> tuple[float, float, float]:
     """(apply µs per substep, stepSimulation µs per substep, applyExternalForce calls per
-    substep) over ``steps`` env steps."""
+    substep) over ``steps`` env steps, timing the loop that runs (compiled or Python)."""
     sim = env.unwrapped._sim
     injector = sim.injector
-    cid = sim.client
     spent = {"apply": 0.0, "step": 0.0, "calls": 0}
+    had_own = "apply" in vars(injector)  # the compiled loop is bound on the instance
     inner_apply = injector.apply
-    inner_force = p.applyExternalForce
     inner_step = p.stepSimulation
 
     def timed_apply() -> None:
         t0 = time.perf_counter()
         inner_apply()
         spent["apply"] += time.perf_counter() - t0
-
-    def counted_force(*args, **kwargs):
-        spent["calls"] += 1
-        return inner_force(*args, **kwargs)
+        spent["calls"] += _forces_applied(injector)
 
     def timed_step(*args, **kwargs):
         t0 = time.perf_counter()
@@ -78,7 +83,6 @@ def _in_situ(env: gym.Env, action: np.ndarray, steps: int) -> tuple[float, float
         spent["step"] += time.perf_counter() - t0
         return out
 
-    # First pass: time (no counting wrapper in the way); second pass: count the force calls.
     injector.apply = timed_apply
     p.stepSimulation = timed_step
     try:
@@ -86,18 +90,13 @@ def _in_situ(env: gym.Env, action: np.ndarray, steps: int) -> tuple[float, float
             env.step(action)
     finally:
         p.stepSimulation = inner_step
-    substeps = steps * sim.substeps
-    apply_us, step_us = spent["apply"] / substeps * 1e6, spent["step"] / substeps * 1e6
-    injector.apply = inner_apply
-    p.applyExternalForce = counted_force
-    try:
-        for _ in range(5):
-            env.step(action)
-    finally:
-        p.applyExternalForce = inner_force
-        del injector.apply
-    del cid
-    return apply_us, step_us, spent["calls"] / (5 * sim.substeps)
+        if had_own:
+            injector.apply = inner_apply
+        else:
+            del injector.apply
+    substeps = steps * sim.substeps  # (the force count runs outside the timed span)
+    return (spent["apply"] / substeps * 1e6, spent["step"] / substeps * 1e6,
+            spent["calls"] / substeps)
 
 
 def _queries(env: gym.Env, calls: int) -> dict[str, float]:
@@ -149,7 +148,7 @@ def measure(env_id: str, steps: int, repeats: int, warmup: int = 20,
             row = {"apply_total": apply_us, "step_simulation": step_us,
                    "force_calls_per_substep": n_force,
                    "apply_external_force": q.pop("apply_external_force_1") * n_force, **q}
-            row["python"] = apply_us - sum(row[k] for k in PARTS)
+            row["compute"] = apply_us - sum(row[k] for k in PARTS)
             rounds.append(row)
         return {k: statistics.median(r[k] for r in rounds) for k in rounds[0]}
     finally:
@@ -163,10 +162,10 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--json", default=None)
     args = parser.parse_args()
-    cols = ("apply_total", *PARTS, "python", "force_calls_per_substep", "step_simulation",
+    cols = ("apply_total", *PARTS, "compute", "force_calls_per_substep", "step_simulation",
             "alt_get_link_states_novel", "alt_keyword_queries",
             "alt_apply_external_force_keyword", "alt_apply_external_torque")
-    short = ("apply", "contacts", "links+vel", "joints", "forces", "python", "n_force",
+    short = ("apply", "contacts", "links+vel", "joints", "forces", "compute", "n_force",
              "stepSim", "a:links", "a:kwqry", "a:kwforce", "a:torque")
     print(f"{'env (us per substep)':32s}" + "".join(f"{s:>10s}" for s in short))
     out = {}
