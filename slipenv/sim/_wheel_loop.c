@@ -148,7 +148,8 @@ static void rut_resistance_vector(double res, const double state[3], const doubl
 
 enum { KIND_JANOSI = 0, KIND_LINEAR = 1, KIND_REINA = 2 };
 
-/* A force model bound to one soil: what `ForceModel.kernel_constants(soil)` returns. */
+/* A force model bound to one soil: what `ForceModel.kernel_constants(soil)` returns
+ * (slipenv.terramechanics.models.KernelConstants, a NamedTuple with these fields in order). */
 typedef struct {
     int kind;
     /* janosi, linear: cohesion force A c [N], tan phi, shear ratio L/K, kappa */

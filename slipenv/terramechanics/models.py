@@ -22,7 +22,7 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
 from types import MappingProxyType
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -34,8 +34,9 @@ from slipenv.terramechanics.reina import reina_forces
 from slipenv.terramechanics.soil import SoilParams
 from slipenv.terramechanics.vectorize import Kernel, forces_on_arrays
 
-__all__ = ["ForceModel", "JanosiForceModel", "LinearSlipForceModel", "ReinaForceModel",
-           "FORCE_MODELS", "force_model_by_name", "wheel_kernel"]
+__all__ = ["ForceModel", "JanosiForceModel", "KernelConstants", "LinearSlipForceModel",
+           "ReinaForceModel", "FORCE_MODELS", "force_model_by_name", "wheel_kernel"]
+
 
 @runtime_checkable
 class ForceModel(Protocol):
@@ -79,6 +80,32 @@ def wheel_kernel(model: ForceModel, soil: SoilParams) -> Kernel:
         return float(fx[0]), float(fy[0]), float(model.resistance_n(w, soil)[0])
 
     return array_kernel
+
+
+class KernelConstants(NamedTuple):
+    """A force model bound to one soil, as the compiled substep loop reads it
+    (``slipenv/sim/_wheel_loop.c``, ``Kernel``; field order is the C side's).
+
+    ``kind`` names the law (0 Janosi, 1 linear, 2 Reina); the fields a law does not use are 0.
+    """
+
+    kind: int
+    cohesion_force_n: float  # A c (Janosi, linear; Lindgren Eq. 3)
+    tan_phi: float
+    shear_ratio: float  # L/K = 1/B
+    kappa: float  # lateral_stiffness_ratio (Janosi, linear)
+    mu: float  # Reina Eq. 5-9
+    c_x_n: float  # C_x, over W_ref when scaled
+    c_y_n: float
+    a_x: float
+    a_y: float
+    scaled: bool  # Reina: the law at W = 1 times W
+    gross: bool  # Reina with compaction: gross thrust
+    gross_c_x_n: float  # C_x as given, for the gross thrust
+    reference_load_n: float  # W_ref when scaled, else 0
+    rolling_resistance_coeff: float  # f_r
+    compaction_gamma: float  # gamma of gamma W^e (0: rigid ground or none)
+    compaction_exponent: float  # e
 
 
 class _PatchModel(ABC):
@@ -133,21 +160,18 @@ class _PatchModel(ABC):
     # The compiled substep loop's name for the class's force law (`kernel_constants`).
     _COMPILED_KIND: int | None = None
 
-    def kernel_constants(self, soil: SoilParams) -> tuple[Any, ...] | None:
-        """The constants `scalar_kernel` binds, flat, for the compiled substep loop.
-
-        ``(kind, A c, tan phi, L/K, kappa, mu, C_x, C_y, A_x, A_y, scaled, gross, C_x raw,
-        W_ref, f_r, gamma, e)``: what ``slipenv/sim/_wheel_loop.c`` evaluates with the same
-        arithmetic as this class's plain float law (tested bit for bit). None for a subclass
-        that changes the law: the compiled loop only knows slipenv's own classes.
-        """
+    def kernel_constants(self, soil: SoilParams) -> KernelConstants | None:
+        """The constants `scalar_kernel` binds, for the compiled substep loop: what
+        ``slipenv/sim/_wheel_loop.c`` evaluates with the same arithmetic as this class's plain
+        float law (tested bit for bit). None for a subclass that changes the law: the compiled
+        loop only knows slipenv's own classes."""
         if self._COMPILED_KIND is None or type(self) not in _COMPILED_MODELS:
             return None
         ac, tan_phi, ratio = self._patch_constants(soil)
         gamma, exponent = self._compaction(soil)
-        return (self._COMPILED_KIND, ac, tan_phi, ratio, self.lateral_stiffness_ratio,
-                0.0, 0.0, 0.0, 0.0, 0.0, False, False, 0.0, 0.0,
-                self.rolling_resistance_coeff, gamma, exponent)
+        return KernelConstants(self._COMPILED_KIND, ac, tan_phi, ratio,
+                               self.lateral_stiffness_ratio, 0.0, 0.0, 0.0, 0.0, 0.0, False,
+                               False, 0.0, 0.0, self.rolling_resistance_coeff, gamma, exponent)
 
     def scalar_kernel(self, soil: SoilParams) -> Kernel:
         """The per-wheel float function ``(slip, tan_beta, load_n) -> (fx, fy, resistance)``.
@@ -341,17 +365,17 @@ class ReinaForceModel(_PatchModel):
             c_x, c_y = c_x / w_ref, c_y / w_ref
         return mu, c_x, c_y, float(soil.a_x), float(soil.a_y)
 
-    def kernel_constants(self, soil: SoilParams) -> tuple[Any, ...] | None:
+    def kernel_constants(self, soil: SoilParams) -> KernelConstants | None:
         """As `_PatchModel.kernel_constants`, for Reina's law (and its gross thrust)."""
         if type(self) is not ReinaForceModel:
             return None
         mu, c_x, c_y, a_x, a_y = self._reina_constants(soil)
         scaled = self.scale_stiffness_with_load
         gamma, exponent = self._compaction(soil)
-        return (self._COMPILED_KIND, 0.0, 0.0, 0.0, 1.0, mu, c_x, c_y, a_x, a_y, scaled,
-                self.compaction, float(soil.c_x_n),
-                float(soil.reference_load_n) if scaled else 0.0,
-                self.rolling_resistance_coeff, gamma, exponent)
+        return KernelConstants(self._COMPILED_KIND, 0.0, 0.0, 0.0, 1.0, mu, c_x, c_y, a_x, a_y,
+                               scaled, self.compaction, float(soil.c_x_n),
+                               float(soil.reference_load_n) if scaled else 0.0,
+                               self.rolling_resistance_coeff, gamma, exponent)
 
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
         mu, c_x, c_y, a_x, a_y = self._reina_constants(soil)

@@ -175,13 +175,12 @@ def test_compiled_true_with_a_foreign_force_model_is_a_clear_error(make_sim):
 
 def test_division_by_zero_raises_as_in_python():
     model = ReinaForceModel(WHEEL, scale_stiffness_with_load=False)
-    constants = list(model.kernel_constants(SOIL_PARAMS[0]))
-    constants[5] = 0.0  # mu = 0: Python's law divides by mu W
+    constants = model.kernel_constants(SOIL_PARAMS[0])._replace(mu=0.0)  # Python: / (mu W)
     params = SOIL_PARAMS[0]._replace(mu=0.0)
     with pytest.raises(ZeroDivisionError):
         model.scalar_kernel(params)(0.1, 0.0, 100.0)
     with pytest.raises(ZeroDivisionError):
-        loop.kernel(tuple(constants), 0.1, 0.0, 100.0)
+        loop.kernel(constants, 0.1, 0.0, 100.0)
     assert math.isfinite(loop.kernel(model.kernel_constants(SOIL_PARAMS[0]), 0.1, 0.0, 100.0)[0])
 
 
