@@ -288,18 +288,24 @@ class Simulator:
         cid, bid = self.client, self.body.body_id
         pos, quat = p.getBasePositionAndOrientation(bid, physicsClientId=cid)
         lin, ang = p.getBaseVelocity(bid, physicsClientId=cid)
-        rot = p.getMatrixFromQuaternion(quat)
-        r = [rot[0:3], rot[3:6], rot[6:9]]  # rows: world components of body axes as columns
-        ref = self.body.base_to_reference_m
-        ref_w = [sum(r[i][j] * ref[j] for j in range(3)) for i in range(3)]
-        position = tuple(pos[i] + ref_w[i] for i in range(3))
+        # Row-major: rot[3 i + j] is the world i component of body axis j. The sums are written
+        # out as sum() adds (0.0 first, then left to right), so the values are sum()'s.
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = p.getMatrixFromQuaternion(quat)
+        f0, f1, f2 = self.body.base_to_reference_m
+        ref_w = [0.0 + r00 * f0 + r01 * f1 + r02 * f2, 0.0 + r10 * f0 + r11 * f1 + r12 * f2,
+                 0.0 + r20 * f0 + r21 * f1 + r22 * f2]
+        position = (pos[0] + ref_w[0], pos[1] + ref_w[1], pos[2] + ref_w[2])
         # Velocity of the reference point: v + ω × r_ref.
         v_ref = (
             lin[0] + ang[1] * ref_w[2] - ang[2] * ref_w[1],
             lin[1] + ang[2] * ref_w[0] - ang[0] * ref_w[2],
             lin[2] + ang[0] * ref_w[1] - ang[1] * ref_w[0],
         )
-        to_body = lambda v: tuple(sum(r[i][j] * v[i] for i in range(3)) for j in range(3))  # noqa: E731
+        def to_body(v: tuple[float, float, float]) -> tuple[float, float, float]:
+            v0, v1, v2 = v
+            return (0.0 + r00 * v0 + r10 * v1 + r20 * v2, 0.0 + r01 * v0 + r11 * v1 + r21 * v2,
+                    0.0 + r02 * v0 + r12 * v1 + r22 * v2)
+
         v_body = to_body(v_ref)
         yaw_rate = to_body(ang)[2]
         if self._prev_vel is None:
