@@ -50,13 +50,13 @@ from __future__ import annotations
 import importlib
 import logging
 import math
-import os
 from types import ModuleType
 
 import numpy as np
 from scipy import stats
 
 from slipenv.contracts import PoseEstimate, SensorFrame, wrap_angle
+from slipenv.contracts.switches import env_flag, pure_python
 
 from ..base import OdometryGeometry, check_frame_time
 from . import models as lm
@@ -81,10 +81,9 @@ logger = logging.getLogger(__name__)
 _ROUTINE_SKIPS = frozenset({"bearing_gated"})  # counted in extras['skipped'], not logged
 
 SENSORS = ("gyro", "acc", "tilt", "odo", "bearing")  # keys of LindgrenEKF.history
-# Set either to 1 to run every LindgrenEKF made with ``compiled=None`` on the numpy reference
-# (the second is the package-wide switch of slipenv.sim.compiled, which estimators may not import).
+# Set to 1 to run every LindgrenEKF made with ``compiled=None`` on the numpy reference (as the
+# package-wide ``SLIPENV_PURE_PYTHON`` does, slipenv.contracts.switches).
 FORCE_NUMPY_ENV = "SLIPENV_LINDGREN_NUMPY"
-PURE_PYTHON_ENV = "SLIPENV_PURE_PYTHON"
 
 
 def compiled_available() -> bool:
@@ -95,7 +94,7 @@ def compiled_available() -> bool:
 def _select_kernel(compiled: bool | None) -> ModuleType | None:
     """The compiled kernel to use, or None for the numpy reference (see ``LindgrenEKF``)."""
     if compiled is None:
-        if any(os.environ.get(v, "") not in ("", "0") for v in (FORCE_NUMPY_ENV, PURE_PYTHON_ENV)):
+        if env_flag(FORCE_NUMPY_ENV) or pure_python():
             return None
         return _compiled_kernel
     if compiled and _compiled_kernel is None:

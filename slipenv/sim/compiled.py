@@ -10,17 +10,11 @@ functions stay the physics' one source: each compiled kernel is tested bit for b
 from __future__ import annotations
 
 import importlib
-import os
 from types import ModuleType
 
+from slipenv.contracts.switches import PURE_PYTHON_ENV, pure_python
+
 __all__ = ["PURE_PYTHON_ENV", "pure_python", "wheel_loop_module"]
-
-PURE_PYTHON_ENV = "SLIPENV_PURE_PYTHON"
-
-
-def pure_python() -> bool:
-    """True if ``SLIPENV_PURE_PYTHON`` asks for the plain Python loops (any value but ''/0)."""
-    return os.environ.get(PURE_PYTHON_ENV, "") not in ("", "0")
 
 
 def wheel_loop_module() -> ModuleType | None:

@@ -127,7 +127,10 @@ class Simulator:
             raise ValueError(f"multi_pass applies to the per-wheel soil law; vehicle "
                              f"{vehicle.name!r} uses the Wong-Chiang track model")
         self.multi_pass = multi_pass
-        self.castor_own_geometry = bool(castor_own_geometry)
+        if not isinstance(castor_own_geometry, bool):
+            raise ValueError("castor_own_geometry must be True or False, got "
+                             f"{castor_own_geometry!r}")
+        self.castor_own_geometry = castor_own_geometry
         self.spec = vehicle
         self.substeps = int(round(ratio))
         self.dt_s = 1.0 / physics_hz

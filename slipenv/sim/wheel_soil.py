@@ -301,11 +301,14 @@ class WheelSoilInjector:
         self._damping = [self._soil_damping(k) for k in range(self.n)]
         self._rut_ratio = [self._rut_load_ratios(k, sp) for k, sp in enumerate(rows)]
         self._rut_damping = [self._resistance_damping(k) for k in range(self.n)]
-        # What `apply` reads per wheel, in one tuple (one unpacking instead of ten lookups).
-        self._wheel_rows = [
-            (k, self.links[k], self.driven[k], self.spin_index[k], self._r_eff[k], self._h[k],
-             self._kernels[k], *self._damping[k], self._rut_damping[k]) for k in range(self.n)]
-        if self._loop is not None:
+        if self._loop is None:
+            # What the Python `apply` reads per wheel, in one tuple (one unpacking instead of
+            # ten lookups).
+            self._wheel_rows = [
+                (k, self.links[k], self.driven[k], self.spin_index[k], self._r_eff[k],
+                 self._h[k], self._kernels[k], *self._damping[k], self._rut_damping[k])
+                for k in range(self.n)]
+        else:
             constants: dict[tuple[int, int], Any] = {}
             for model, sp in zip(self._models, rows, strict=True):
                 if (id(model), id(sp)) not in constants:

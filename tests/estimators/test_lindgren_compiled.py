@@ -20,6 +20,7 @@ import pytest
 
 from slipenv.contracts import wrap_angle
 from slipenv.contracts.frame import SensorFrame
+from slipenv.contracts.switches import PURE_PYTHON_ENV
 from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.lindgren import ekf as ekf_module
 from slipenv.estimators.lindgren import models as lm
@@ -27,8 +28,9 @@ from slipenv.estimators.lindgren.ekf import LindgrenEKF, LindgrenNoise, OracleSo
 from slipenv.sensors.beacons import BeaconScanner, default_beacons_xy
 from tests.estimators.lindgren_synth import simulate, straight_and_turn, torque, truth0
 
-pytestmark = pytest.mark.skipif(not ekf_module.compiled_available(),
-                                reason="the _ekf extension is not built")
+pytestmark = pytest.mark.skipif(not ekf_module.compiled_available(), reason=(
+    "the compiled EKF kernel (estimators/lindgren/_ekf.c) was not built: `pip install -e .` "
+    "builds it; setup.py marks it optional, so the numpy reference runs without it"))
 
 BOUND = 1e-9  # relative agreement of the compiled kernel with the numpy reference
 GEOM = OdometryGeometry(wheel_radius_m=0.275, track_width_m=1.5, counts_per_rad=285.0)
@@ -162,18 +164,18 @@ def test_public_predict_to_replaces_the_arrays_instead_of_writing_into_them():
 
 def test_kernel_choice_by_option_and_environment(monkeypatch):
     monkeypatch.delenv(ekf_module.FORCE_NUMPY_ENV, raising=False)
-    monkeypatch.delenv(ekf_module.PURE_PYTHON_ENV, raising=False)
+    monkeypatch.delenv(PURE_PYTHON_ENV, raising=False)
     assert LindgrenEKF(GEOM, 2).compiled  # the default when the kernel is built
-    monkeypatch.setenv(ekf_module.PURE_PYTHON_ENV, "1")  # the package-wide switch
+    monkeypatch.setenv(PURE_PYTHON_ENV, "1")  # the package-wide switch
     assert not LindgrenEKF(GEOM, 2).compiled
-    monkeypatch.setenv(ekf_module.PURE_PYTHON_ENV, "0")
+    monkeypatch.setenv(PURE_PYTHON_ENV, "0")
     assert LindgrenEKF(GEOM, 2).compiled
     monkeypatch.setenv(ekf_module.FORCE_NUMPY_ENV, "1")
     assert not LindgrenEKF(GEOM, 2).compiled
     assert LindgrenEKF(GEOM, 2, compiled=True).compiled  # an explicit choice wins
     monkeypatch.setattr(ekf_module, "_compiled_kernel", None)
     monkeypatch.delenv(ekf_module.FORCE_NUMPY_ENV)
-    monkeypatch.delenv(ekf_module.PURE_PYTHON_ENV)
+    monkeypatch.delenv(PURE_PYTHON_ENV)
     assert not LindgrenEKF(GEOM, 2).compiled  # not built: numpy
     with pytest.raises(ValueError, match="compiled=True"):
         LindgrenEKF(GEOM, 2, compiled=True)

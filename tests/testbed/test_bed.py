@@ -72,9 +72,10 @@ def test_at_small_slip_the_bed_matches_reinas_law_at_the_imposed_slip_angle(rein
     "known modelling defect, kept visible: slip_dynamics.relax_slip relaxes tan(beta) to "
     "v_lat / max(|r omega|, |v_x|), which is v_lat/(r omega) in drive, not Reina's v_lat/v_x "
     "(Eq. 4); at large slip the bed's side force therefore falls short of the law at the "
-    "imposed angle (small slips match within 5 %, test above). Changing the state equation "
-    "moves every vehicle's lateral dynamics and the reproductions, so it waits for a physics "
-    "change that re-runs them (issue 16 closing note)"))
+    "imposed angle (small slips match within 5 %, test above). The state equation is right "
+    "for the isotropic Janosi law (it keeps (s, tan beta) along the sliding velocity); the "
+    "fix belongs in the Reina law's input (v_lat/v_x from the state), which moves the rover's "
+    "lateral dynamics and the Reina reproduction, so it waits for a change that re-runs them"))
 def test_at_large_slip_the_bed_matches_reinas_law_at_the_imposed_slip_angle(reina_sweep):
     for t in reina_sweep:
         fx, fy = law(t.slip_ratio, math.tan(math.radians(t.slip_angle_deg)), t.normal_load_n)
