@@ -8,6 +8,8 @@ reference the compiled kernels are tested against: `slipenv.sim.compiled`,
 arithmetic rounds exactly as Python's does.
 """
 
+import sys
+
 from setuptools import Extension, setup
 
 _FLAGS = ["-O2", "-ffp-contract=off", "-fno-fast-math", "-std=c99"]
@@ -15,6 +17,8 @@ _FLAGS = ["-O2", "-ffp-contract=off", "-fno-fast-math", "-std=c99"]
 setup(
     ext_modules=[
         Extension("slipenv.sim._wheel_loop", ["slipenv/sim/_wheel_loop.c"],
+                  depends=["slipenv/sim/bullet_native.h"],
+                  libraries=[] if sys.platform == "win32" else ["dl"],
                   extra_compile_args=_FLAGS, optional=True),
         Extension("slipenv.estimators.lindgren._ekf", ["estimators/lindgren/_ekf.c"],
                   extra_compile_args=_FLAGS, optional=True),

@@ -14,7 +14,11 @@ other processes hits all alike), in microseconds per physics substep:
 * ``apply_external_force``: one call's cost times the calls per substep actually made (counted
   in the in-situ loop);
 * ``compute``: apply_total minus the queries and the force calls: the frame, slip and force
-  law, compiled (``slipenv/sim/_wheel_loop.c``) or, with ``SLIPENV_PURE_PYTHON=1``, in Python.
+  law, compiled (``slipenv/sim/_wheel_loop.c``) or, with ``SLIPENV_PURE_PYTHON=1``, in Python;
+* ``apply_native`` and ``apply_python_api``: ``apply`` in situ with the compiled loop reading
+  PyBullet through Bullet's C API (``slipenv/sim/bullet_native.h``) and through pybullet's
+  Python functions, alternated in each round (NaN without the compiled loop or native access).
+  The query and force columns above are the Python API's costs, which the native path avoids.
 
 and, for deciding what to cut, alternatives (``alt_*``, not part of the sum): link states
 without velocities (one call), the three queries with keyword arguments (their sum, as the
@@ -141,14 +145,24 @@ def measure(env_id: str, steps: int, repeats: int, warmup: int = 20,
         action.flat[0] = 0.5 * float(env.action_space.high.flat[0])
         for _ in range(warmup):
             env.step(action)
+        loop = env.unwrapped._sim.injector._loop
+        native = loop is not None and bool(loop.native)
         rounds: list[dict[str, float]] = []
         for _ in range(repeats):
+            by_path = {"apply_native": float("nan"), "apply_python_api": float("nan")}
+            if native:
+                for key, on in (("apply_python_api", False), ("apply_native", True)):
+                    loop.native = on
+                    by_path[key] = _in_situ(env, action, steps)[0]
             apply_us, step_us, n_force = _in_situ(env, action, steps)
             q = _queries(env, calls)
-            row = {"apply_total": apply_us, "step_simulation": step_us,
+            row = {"apply_total": apply_us, "step_simulation": step_us, **by_path,
                    "force_calls_per_substep": n_force,
                    "apply_external_force": q.pop("apply_external_force_1") * n_force, **q}
-            row["compute"] = apply_us - sum(row[k] for k in PARTS)
+            # With native access `apply` makes none of the Python calls timed above: the
+            # compute share is then what the Python-API path spends beyond them.
+            total = by_path["apply_python_api"] if native else apply_us
+            row["compute"] = total - sum(row[k] for k in PARTS)
             rounds.append(row)
         return {k: statistics.median(r[k] for r in rounds) for k in rounds[0]}
     finally:
@@ -162,11 +176,12 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--json", default=None)
     args = parser.parse_args()
-    cols = ("apply_total", *PARTS, "compute", "force_calls_per_substep", "step_simulation",
+    cols = ("apply_total", "apply_native", "apply_python_api", *PARTS, "compute",
+            "force_calls_per_substep", "step_simulation",
             "alt_get_link_states_novel", "alt_keyword_queries",
             "alt_apply_external_force_keyword", "alt_apply_external_torque")
-    short = ("apply", "contacts", "links+vel", "joints", "forces", "compute", "n_force",
-             "stepSim", "a:links", "a:kwqry", "a:kwforce", "a:torque")
+    short = ("apply", "native", "py-api", "contacts", "links+vel", "joints", "forces", "compute",
+             "n_force", "stepSim", "a:links", "a:kwqry", "a:kwforce", "a:torque")
     print(f"{'env (us per substep)':32s}" + "".join(f"{s:>10s}" for s in short))
     out = {}
     for env_id in args.env_ids:

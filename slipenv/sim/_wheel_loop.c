@@ -26,6 +26,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "bullet_native.h"
+
 static PyObject *g_hypot = NULL; /* math.hypot */
 
 /* -- float helpers with Python's error behaviour ---------------------------------------- */
@@ -302,21 +304,75 @@ typedef struct {
     double load, fx, fy, res, damper, force[3];
 } Wheel;
 
+/* What one substep reads from PyBullet, in the form the loop uses. */
+typedef struct {
+    double *load;  /* n: normal load [N], the sum of the wheel's contact forces */
+    double *patch; /* n x 6: load-weighted sums of contact points and normals */
+    int *has_patch;
+    double *link;  /* n x 13: COM orientation (4), position (3), velocity (3), angular (3) */
+    double *rate;  /* n_spin: spin joint velocities */
+    int chassis;   /* a body other than a wheel touched the ground */
+} Inputs;
+
+#define LINK_WIDTH 13
+
 typedef struct {
     PyObject_HEAD
-    int n;
+    int n, n_spin;
     long body, ground, client, world;
     double dt, stick, fade_speed, low_speed;
     int multi_pass, chassis_contact;
-    PyObject *contacts_fn, *links_fn, *joints_fn, *apply_fn;
+    PyObject *contacts_fn, *links_fn, *joints_fn, *apply_fn, *error_type;
     PyObject *contacts_args, *links_args, *joints_args; /* argument tuples */
     PyObject *body_obj, *client_obj, *world_obj;
     int max_link;
     int *link_to_wheel; /* link index -> wheel, -1 */
+    int *spin_joints;   /* n_spin joint indices */
     Wheel *w;
-    double *patch;     /* n x 6 */
-    int *has_patch;
+    Inputs in, check;   /* this substep's readings; `check` verifies the native ones */
+    int n_forces;
+    int *force_link;    /* 2n */
+    double *force_vec;  /* 2n x 6: force, point of application (world frame) */
+    /* native queries through Bullet's C API (bullet_native.h) */
+    BulletApi api;
+    int bound, native, verify, mismatch, contact_status, state_status;
 } WheelLoop;
+
+static int inputs_alloc(Inputs *in, int n, int n_spin)
+{
+    int m = n > 0 ? n : 1;
+    in->load = PyMem_Calloc(m, sizeof(double));
+    in->patch = PyMem_Calloc(6 * m, sizeof(double));
+    in->has_patch = PyMem_Calloc(m, sizeof(int));
+    in->link = PyMem_Calloc(LINK_WIDTH * m, sizeof(double));
+    in->rate = PyMem_Calloc(n_spin > 0 ? n_spin : 1, sizeof(double));
+    in->chassis = 0;
+    if (!in->load || !in->patch || !in->has_patch || !in->link || !in->rate) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    return 0;
+}
+
+static void inputs_free(Inputs *in)
+{
+    PyMem_Free(in->load);
+    PyMem_Free(in->patch);
+    PyMem_Free(in->has_patch);
+    PyMem_Free(in->link);
+    PyMem_Free(in->rate);
+}
+
+/* Bit-for-bit equality of two readings (memcmp: a -0.0 or a NaN pattern counts). */
+static int inputs_equal(const Inputs *a, const Inputs *b, int n, int n_spin)
+{
+    return a->chassis == b->chassis
+           && memcmp(a->load, b->load, n * sizeof(double)) == 0
+           && memcmp(a->has_patch, b->has_patch, n * sizeof(int)) == 0
+           && memcmp(a->patch, b->patch, 6 * n * sizeof(double)) == 0
+           && memcmp(a->link, b->link, LINK_WIDTH * n * sizeof(double)) == 0
+           && memcmp(a->rate, b->rate, n_spin * sizeof(double)) == 0;
+}
 
 static void loop_dealloc(WheelLoop *self)
 {
@@ -324,6 +380,7 @@ static void loop_dealloc(WheelLoop *self)
     Py_XDECREF(self->links_fn);
     Py_XDECREF(self->joints_fn);
     Py_XDECREF(self->apply_fn);
+    Py_XDECREF(self->error_type);
     Py_XDECREF(self->contacts_args);
     Py_XDECREF(self->links_args);
     Py_XDECREF(self->joints_args);
@@ -331,9 +388,12 @@ static void loop_dealloc(WheelLoop *self)
     Py_XDECREF(self->client_obj);
     Py_XDECREF(self->world_obj);
     PyMem_Free(self->link_to_wheel);
+    PyMem_Free(self->spin_joints);
     PyMem_Free(self->w);
-    PyMem_Free(self->patch);
-    PyMem_Free(self->has_patch);
+    inputs_free(&self->in);
+    inputs_free(&self->check);
+    PyMem_Free(self->force_link);
+    PyMem_Free(self->force_vec);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
 
@@ -357,8 +417,10 @@ static int loop_init(WheelLoop *self, PyObject *args, PyObject *kwds)
     self->links_fn = PyObject_GetAttrString(pb, "getLinkStates");
     self->joints_fn = PyObject_GetAttrString(pb, "getJointStates");
     self->apply_fn = PyObject_GetAttrString(pb, "applyExternalForce");
+    self->error_type = PyObject_GetAttrString(pb, "error");
     PyObject *world = PyObject_GetAttrString(pb, "WORLD_FRAME");
-    if (!self->contacts_fn || !self->links_fn || !self->joints_fn || !self->apply_fn || !world)
+    if (!self->contacts_fn || !self->links_fn || !self->joints_fn || !self->apply_fn
+        || !self->error_type || !world)
         return -1;
     self->world = PyLong_AsLong(world);
     self->world_obj = world;
@@ -373,9 +435,28 @@ static int loop_init(WheelLoop *self, PyObject *args, PyObject *kwds)
     if (!self->body_obj || !self->client_obj || !self->contacts_args || !self->links_args
         || !self->joints_args)
         return -1;
+    self->n_spin = (int)PyList_GET_SIZE(spin_joints);
     self->w = PyMem_Calloc(self->n > 0 ? self->n : 1, sizeof(Wheel));
-    self->patch = PyMem_Calloc(6 * (self->n > 0 ? self->n : 1), sizeof(double));
-    self->has_patch = PyMem_Calloc(self->n > 0 ? self->n : 1, sizeof(int));
+    self->spin_joints = PyMem_Calloc(self->n_spin > 0 ? self->n_spin : 1, sizeof(int));
+    self->force_link = PyMem_Calloc(2 * (self->n > 0 ? self->n : 1), sizeof(int));
+    self->force_vec = PyMem_Calloc(12 * (self->n > 0 ? self->n : 1), sizeof(double));
+    if (!self->w || !self->spin_joints || !self->force_link || !self->force_vec) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    if (inputs_alloc(&self->in, self->n, self->n_spin) < 0
+        || inputs_alloc(&self->check, self->n, self->n_spin) < 0)
+        return -1;
+    for (int j = 0; j < self->n_spin; j++) {
+        long joint = PyLong_AsLong(PyList_GET_ITEM(spin_joints, j));
+        if (joint == -1 && PyErr_Occurred())
+            return -1;
+        if (joint < 0 || joint > 100000) {
+            PyErr_Format(PyExc_ValueError, "spin joint index %ld out of range", joint);
+            return -1;
+        }
+        self->spin_joints[j] = (int)joint;
+    }
     self->max_link = -1;
     for (int k = 0; k < self->n; k++) {
         long link = PyLong_AsLong(PyList_GET_ITEM(links, k));
@@ -392,7 +473,7 @@ static int loop_init(WheelLoop *self, PyObject *args, PyObject *kwds)
             self->max_link = (int)link;
     }
     self->link_to_wheel = PyMem_Malloc(sizeof(int) * (self->max_link + 2));
-    if (!self->w || !self->patch || !self->has_patch || !self->link_to_wheel) {
+    if (!self->link_to_wheel) {
         PyErr_NoMemory();
         return -1;
     }
@@ -488,24 +569,53 @@ static int get_vec(PyObject *seq, Py_ssize_t n, double *out)
     return 0;
 }
 
-static int apply_force(WheelLoop *self, int link, double fx, double fy, double fz, double px,
-                       double py, double pz)
+/* Queue a force [N] at a point (world frame) on `link`; `submit_forces` applies the queue. */
+static void queue_force(WheelLoop *self, int link, double fx, double fy, double fz, double px,
+                        double py, double pz)
 {
-    PyObject *force = Py_BuildValue("(ddd)", fx, fy, fz);
-    PyObject *pos = Py_BuildValue("(ddd)", px, py, pz);
-    PyObject *link_obj = PyLong_FromLong(link);
-    PyObject *r = NULL;
-    if (force && pos && link_obj) {
-        PyObject *args[6] = {self->body_obj, link_obj, force, pos, self->world_obj,
-                             self->client_obj};
-        r = PyObject_Vectorcall(self->apply_fn, args, 6, NULL);
+    int i = self->n_forces++;
+    double *f = &self->force_vec[6 * i];
+    self->force_link[i] = link;
+    f[0] = fx; f[1] = fy; f[2] = fz;
+    f[3] = px; f[4] = py; f[5] = pz;
+}
+
+/* Apply the queued forces in order, each as its own applyExternalForce command: natively
+ * through Bullet's C API, or through the Python API. One command per force, as pybullet does:
+ * b3ApplyExternalForce can queue several forces in one command, but it stores the i-th force
+ * at [i + j] where the server reads [3 i + j] (PhysicsClientC_API.cpp against
+ * PhysicsServerCommandProcessor.cpp), so a batched command applies wrong forces. */
+static int submit_forces(WheelLoop *self, b3Handle sm)
+{
+    int m = self->n_forces;
+    self->n_forces = 0;
+    if (sm != NULL) {
+        for (int i = 0; i < m; i++) {
+            b3Handle cmd = self->api.init_force(sm);
+            self->api.force(cmd, (int)self->body, self->force_link[i], &self->force_vec[6 * i],
+                            &self->force_vec[6 * i + 3], (int)self->world);
+            self->api.submit(sm, cmd);
+        }
+        return 0;
     }
-    Py_XDECREF(force);
-    Py_XDECREF(pos);
-    Py_XDECREF(link_obj);
-    if (r == NULL)
-        return -1;
-    Py_DECREF(r);
+    for (int i = 0; i < m; i++) {
+        const double *f = &self->force_vec[6 * i];
+        PyObject *force = Py_BuildValue("(ddd)", f[0], f[1], f[2]);
+        PyObject *pos = Py_BuildValue("(ddd)", f[3], f[4], f[5]);
+        PyObject *link_obj = PyLong_FromLong(self->force_link[i]);
+        PyObject *r = NULL;
+        if (force && pos && link_obj) {
+            PyObject *args[6] = {self->body_obj, link_obj, force, pos, self->world_obj,
+                                 self->client_obj};
+            r = PyObject_Vectorcall(self->apply_fn, args, 6, NULL);
+        }
+        Py_XDECREF(force);
+        Py_XDECREF(pos);
+        Py_XDECREF(link_obj);
+        if (r == NULL)
+            return -1;
+        Py_DECREF(r);
+    }
     return 0;
 }
 
@@ -530,52 +640,35 @@ static int multi_pass(WheelLoop *self, int k, double res, double load_n, double 
     return 0;
 }
 
-static int accumulate_patches(WheelLoop *self, PyObject *contacts)
+static void clear_patches(WheelLoop *self, Inputs *in)
 {
-    if (!PyTuple_Check(contacts)) {
-        PyErr_SetString(PyExc_TypeError, "getContactPoints did not return a tuple");
-        return -1;
-    }
     for (int k = 0; k < self->n; k++) {
-        self->w[k].load = 0.0;
-        self->has_patch[k] = 0;
+        in->load[k] = 0.0;
+        in->has_patch[k] = 0;
     }
-    Py_ssize_t m = PyTuple_GET_SIZE(contacts);
-    for (Py_ssize_t i = 0; i < m; i++) {
-        PyObject *cp = PyTuple_GET_ITEM(contacts, i);
-        if (!PyTuple_Check(cp) || PyTuple_GET_SIZE(cp) < 10) {
-            PyErr_SetString(PyExc_TypeError, "malformed contact point from PyBullet");
-            return -1;
-        }
-        double f;
-        if (get_double(cp, 9, &f) < 0)
-            return -1;
-        if (f <= 0.0)
-            continue;
-        long link = PyLong_AsLong(PyTuple_GET_ITEM(cp, 3));
-        if (link == -1 && PyErr_Occurred())
-            return -1;
-        int k = (link >= -1 && link <= self->max_link) ? self->link_to_wheel[link + 1] : -1;
-        if (k < 0) {
-            self->chassis_contact = 1;
-            continue;
-        }
-        double p[3], nrm[3];
-        if (get_vec(PyTuple_GET_ITEM(cp, 6), 3, p) < 0
-            || get_vec(PyTuple_GET_ITEM(cp, 7), 3, nrm) < 0)
-            return -1;
-        double *a = &self->patch[6 * k];
-        if (!self->has_patch[k]) {
-            a[0] = f * p[0]; a[1] = f * p[1]; a[2] = f * p[2];
-            a[3] = f * nrm[0]; a[4] = f * nrm[1]; a[5] = f * nrm[2];
-            self->has_patch[k] = 1;
-        } else {
-            a[0] += f * p[0]; a[1] += f * p[1]; a[2] += f * p[2];
-            a[3] += f * nrm[0]; a[4] += f * nrm[1]; a[5] += f * nrm[2];
-        }
-        self->w[k].load += f;
+    in->chassis = 0;
+}
+
+/* Add one contact point (load f > 0 on `link`, point p and normal nrm on the ground) to the
+ * wheel's load-weighted sums (WheelSoilInjector._patches). */
+static void add_contact(WheelLoop *self, Inputs *in, long link, double f, const double *p,
+                        const double *nrm)
+{
+    int k = (link >= -1 && link <= self->max_link) ? self->link_to_wheel[link + 1] : -1;
+    if (k < 0) {
+        in->chassis = 1;
+        return;
     }
-    return 0;
+    double *a = &in->patch[6 * k];
+    if (!in->has_patch[k]) {
+        a[0] = f * p[0]; a[1] = f * p[1]; a[2] = f * p[2];
+        a[3] = f * nrm[0]; a[4] = f * nrm[1]; a[5] = f * nrm[2];
+        in->has_patch[k] = 1;
+    } else {
+        a[0] += f * p[0]; a[1] += f * p[1]; a[2] += f * p[2];
+        a[3] += f * nrm[0]; a[4] += f * nrm[1]; a[5] += f * nrm[2];
+    }
+    in->load[k] += f;
 }
 
 static PyObject *call_query(PyObject *fn, PyObject *args)
@@ -583,28 +676,188 @@ static PyObject *call_query(PyObject *fn, PyObject *args)
     return PyObject_Call(fn, args, NULL);
 }
 
-/* One substep: query PyBullet, compute every wheel's forces, apply them. */
-static int loop_step(WheelLoop *self)
+/* This substep's readings through pybullet's Python API: getContactPoints(body, ground),
+ * getLinkStates(body, wheel links, computeLinkVelocity=1), getJointStates(spin joints). */
+static int acquire_python(WheelLoop *self, Inputs *in)
 {
+    int rc = -1;
+    PyObject *links = NULL, *joints = NULL;
     PyObject *contacts = call_query(self->contacts_fn, self->contacts_args);
     if (contacts == NULL)
         return -1;
-    PyObject *links = call_query(self->links_fn, self->links_args);
-    if (links == NULL) {
-        Py_DECREF(contacts);
-        return -1;
-    }
-    PyObject *joints = call_query(self->joints_fn, self->joints_args);
-    int rc = -1;
-    if (joints == NULL)
+    if ((links = call_query(self->links_fn, self->links_args)) == NULL
+        || (joints = call_query(self->joints_fn, self->joints_args)) == NULL)
         goto done;
-    if (!PyTuple_Check(links) || PyTuple_GET_SIZE(links) != self->n || !PyTuple_Check(joints)) {
+    if (!PyTuple_Check(contacts)) {
+        PyErr_SetString(PyExc_TypeError, "getContactPoints did not return a tuple");
+        goto done;
+    }
+    if (!PyTuple_Check(links) || PyTuple_GET_SIZE(links) != self->n || !PyTuple_Check(joints)
+        || PyTuple_GET_SIZE(joints) != self->n_spin) {
         PyErr_SetString(PyExc_TypeError, "unexpected PyBullet link or joint states");
         goto done;
     }
-    if (accumulate_patches(self, contacts) < 0)
-        goto done;
+    clear_patches(self, in);
+    Py_ssize_t m = PyTuple_GET_SIZE(contacts);
+    for (Py_ssize_t i = 0; i < m; i++) {
+        PyObject *cp = PyTuple_GET_ITEM(contacts, i);
+        if (!PyTuple_Check(cp) || PyTuple_GET_SIZE(cp) < 10) {
+            PyErr_SetString(PyExc_TypeError, "malformed contact point from PyBullet");
+            goto done;
+        }
+        double f;
+        if (get_double(cp, 9, &f) < 0)
+            goto done;
+        if (f <= 0.0)
+            continue;
+        long link = PyLong_AsLong(PyTuple_GET_ITEM(cp, 3));
+        if (link == -1 && PyErr_Occurred())
+            goto done;
+        double p[3], nrm[3];
+        if (get_vec(PyTuple_GET_ITEM(cp, 6), 3, p) < 0
+            || get_vec(PyTuple_GET_ITEM(cp, 7), 3, nrm) < 0)
+            goto done;
+        add_contact(self, in, link, f, p, nrm);
+    }
+    for (int k = 0; k < self->n; k++) {
+        PyObject *ls = PyTuple_GET_ITEM(links, k);
+        double *d = &in->link[LINK_WIDTH * k];
+        if (!PyTuple_Check(ls) || PyTuple_GET_SIZE(ls) < 8) {
+            PyErr_SetString(PyExc_TypeError, "malformed link state from PyBullet");
+            goto done;
+        }
+        if (get_vec(PyTuple_GET_ITEM(ls, 1), 4, d) < 0
+            || get_vec(PyTuple_GET_ITEM(ls, 0), 3, d + 4) < 0
+            || get_vec(PyTuple_GET_ITEM(ls, 6), 3, d + 7) < 0
+            || get_vec(PyTuple_GET_ITEM(ls, 7), 3, d + 10) < 0)
+            goto done;
+    }
+    for (int j = 0; j < self->n_spin; j++) {
+        PyObject *js = PyTuple_GET_ITEM(joints, j);
+        if (!PyTuple_Check(js) || PyTuple_GET_SIZE(js) < 2 || get_double(js, 1, &in->rate[j]) < 0) {
+            if (!PyErr_Occurred())
+                PyErr_SetString(PyExc_TypeError, "malformed joint state from PyBullet");
+            goto done;
+        }
+    }
+    rc = 0;
+done:
+    Py_DECREF(contacts);
+    Py_XDECREF(links);
+    Py_XDECREF(joints);
+    return rc;
+}
+
+/* The same readings through Bullet's C API (bullet_native.h): the same two server commands
+ * pybullet submits (a contact query filtered on body and ground; one actual-state request with
+ * link velocities, which carries the joint states too), read without building tuples. */
+static int acquire_native(WheelLoop *self, Inputs *in, b3Handle sm)
+{
+    const BulletApi *api = &self->api;
+    b3Handle cmd = api->init_contacts(sm);
+    api->filter_body_a(cmd, (int)self->body);
+    api->filter_body_b(cmd, (int)self->ground);
+    int type = api->status_type(api->submit(sm, cmd));
+    if (!self->verify && type != self->contact_status) {
+        PyErr_Format(self->error_type, "getContactPoints failed (status %d)", type);
+        return -1;
+    }
+    self->contact_status = type;
+    struct b3ContactInformation info;
+    api->contacts(sm, &info);
+    clear_patches(self, in);
+    for (int i = 0; i < info.m_numContactPoints; i++) {
+        const struct b3ContactPointData *cp = &info.m_contactPointData[i];
+        double f = cp->m_normalForce;
+        if (f <= 0.0)
+            continue;
+        add_contact(self, in, cp->m_linkIndexA, f, cp->m_positionOnBInWS,
+                    cp->m_contactNormalOnBInWS);
+    }
+    cmd = api->init_state(sm, (int)self->body);
+    api->link_velocity(cmd, 1);
+    b3Handle status = api->submit(sm, cmd);
+    type = api->status_type(status);
+    if (!self->verify && type != self->state_status) {
+        PyErr_Format(self->error_type, "getLinkStates failed (status %d)", type);
+        return -1;
+    }
+    self->state_status = type;
+    for (int k = 0; k < self->n; k++) {
+        struct b3LinkState ls;
+        double *d = &in->link[LINK_WIDTH * k];
+        if (!api->link_state(sm, status, self->w[k].link, &ls)) {
+            PyErr_Format(self->error_type, "getLinkStates failed for link %d", self->w[k].link);
+            return -1;
+        }
+        memcpy(d, ls.m_worldOrientation, 4 * sizeof(double));
+        memcpy(d + 4, ls.m_worldPosition, 3 * sizeof(double));
+        memcpy(d + 7, ls.m_worldLinearVelocity, 3 * sizeof(double));
+        memcpy(d + 10, ls.m_worldAngularVelocity, 3 * sizeof(double));
+    }
+    for (int j = 0; j < self->n_spin; j++) {
+        struct b3JointSensorState js;
+        if (!api->joint_state(sm, status, self->spin_joints[j], &js)) {
+            PyErr_Format(self->error_type, "getJointStates failed for joint %d",
+                         self->spin_joints[j]);
+            return -1;
+        }
+        in->rate[j] = js.m_jointVelocity;
+    }
+    return 0;
+}
+
+/* This substep's readings into self->in: natively once verified, else through the Python
+ * API. Until a substep with a wheel on the ground has read the same bits both ways, both
+ * run; a difference switches the loop to the Python API for good (self->mismatch). Returns
+ * the native client handle to apply the forces through, or NULL for the Python API (check
+ * PyErr_Occurred). */
+static b3Handle acquire(WheelLoop *self)
+{
+    if (!self->native) {
+        acquire_python(self, &self->in);
+        return NULL;
+    }
+    b3Handle sm = bullet_client(&self->api, self->client);
+    if (sm == NULL) {
+        PyErr_SetString(self->error_type, "Not connected to physics server.");
+        return NULL;
+    }
+    int failed = acquire_native(self, &self->in, sm) < 0;
+    if (failed && !self->verify)
+        return NULL;
+    if (self->verify) {
+        PyErr_Clear(); /* a native failure before verification is a mismatch, not an error */
+        if (acquire_python(self, &self->check) < 0)
+            return NULL;
+        if (failed || !inputs_equal(&self->in, &self->check, self->n, self->n_spin)) {
+            Inputs tmp = self->in;
+            self->in = self->check;
+            self->check = tmp;
+            self->native = self->verify = 0;
+            self->mismatch = 1;
+            return NULL;
+        }
+        for (int k = 0; k < self->n; k++)
+            if (self->in.has_patch[k])
+                self->verify = 0;
+    }
+    return sm;
+}
+
+/* One substep: read PyBullet, compute every wheel's forces, apply them. */
+static int loop_step(WheelLoop *self)
+{
+    b3Handle sm = acquire(self);
+    if (sm == NULL && PyErr_Occurred())
+        return -1;
+    Inputs *in = &self->in;
+    if (in->chassis)
+        self->chassis_contact = 1;
+    self->n_forces = 0;
     double dt = self->dt, stick = self->stick;
+    for (int k = 0; k < self->n; k++)
+        self->w[k].load = in->load[k];
     for (int k = 0; k < self->n; k++) {
         Wheel *w = &self->w[k];
         double load = w->load;
@@ -615,24 +868,16 @@ static int loop_step(WheelLoop *self)
             w->force[0] = w->force[1] = w->force[2] = 0.0;
             continue;
         }
-        PyObject *ls = PyTuple_GET_ITEM(links, k);
-        if (!PyTuple_Check(ls) || PyTuple_GET_SIZE(ls) < 8) {
-            PyErr_SetString(PyExc_TypeError, "malformed link state from PyBullet");
-            goto done;
-        }
-        double q[4], centre[3], v[3];
-        if (get_vec(PyTuple_GET_ITEM(ls, 1), 4, q) < 0
-            || get_vec(PyTuple_GET_ITEM(ls, 0), 3, centre) < 0
-            || get_vec(PyTuple_GET_ITEM(ls, 6), 3, v) < 0)
-            goto done;
-        const double *a = &self->patch[6 * k];
+        const double *d = &in->link[LINK_WIDTH * k];
+        const double *q = d, *centre = d + 4, *v = d + 7;
+        const double *a = &in->patch[6 * k];
         double inv_w, inv;
         if (py_div(1.0, load, &inv_w) < 0)
-            goto done;
+            return -1;
         double cx = a[0] * inv_w, cy = a[1] * inv_w, cz = a[2] * inv_w;
         double nx = a[3], ny = a[4], nz = a[5];
         if (py_div(1.0, sqrt(nx * nx + ny * ny + nz * nz), &inv) < 0)
-            goto done;
+            return -1;
         nx = nx * inv; ny = ny * inv; nz = nz * inv;
         double qx = q[0], qy = q[1], qz = q[2], qw = q[3];
         double ax = 2.0 * (qx * qy - qw * qz);
@@ -640,7 +885,7 @@ static int loop_step(WheelLoop *self)
         double az = 2.0 * (qy * qz + qw * qx);
         double ex = ay * nz - az * ny, ey = az * nx - ax * nz, ez = ax * ny - ay * nx;
         if (py_div(1.0, sqrt(ex * ex + ey * ey + ez * ez), &inv) < 0)
-            goto done;
+            return -1;
         ex = ex * inv; ey = ey * inv; ez = ez * inv;
         double lx = ny * ez - nz * ey, ly = nz * ex - nx * ez, lz = nx * ey - ny * ex;
         double px = centre[0], py = centre[1], pz = centre[2];
@@ -648,19 +893,12 @@ static int loop_step(WheelLoop *self)
         double v_long = vx * ex + vy * ey + vz * ez;
         double force[3], r_abs;
         if (w->driven) {
-            double om[3], rate;
-            if (get_vec(PyTuple_GET_ITEM(ls, 7), 3, om) < 0)
-                goto done;
-            if (w->spin_index < 0 || w->spin_index >= PyTuple_GET_SIZE(joints)) {
+            const double *om = d + 10;
+            if (w->spin_index < 0 || w->spin_index >= self->n_spin) {
                 PyErr_SetString(PyExc_IndexError, "driven wheel without a spin joint state");
-                goto done;
+                return -1;
             }
-            PyObject *js = PyTuple_GET_ITEM(joints, w->spin_index);
-            if (!PyTuple_Check(js) || PyTuple_GET_SIZE(js) < 2 || get_double(js, 1, &rate) < 0) {
-                if (!PyErr_Occurred())
-                    PyErr_SetString(PyExc_TypeError, "malformed joint state from PyBullet");
-                goto done;
-            }
+            double rate = in->rate[w->spin_index];
             double wx = om[0], wy = om[1], wz = om[2];
             double rx = cx - px, ry = cy - py, rz = cz - pz;
             double v_lat = ((vx + wy * rz - wz * ry) * lx + (vy + wz * rx - wx * rz) * ly
@@ -672,7 +910,7 @@ static int loop_step(WheelLoop *self)
             w->b = t;
             double f_long, f_lat, res;
             if (kernel_eval(&w->kernel, s, t, load, &f_long, &f_lat, &res) < 0)
-                goto done;
+                return -1;
             w->fx = f_long;
             w->fy = f_lat;
             double d_y = lateral_damping(t - t_old, v_ref, w->d_lat, self->fade_speed);
@@ -680,11 +918,10 @@ static int loop_step(WheelLoop *self)
                                               self->low_speed);
             f_lat += d_y;
             f_long += d_x;
-            if (apply_force(self, w->link, f_long * ex + f_lat * lx, f_long * ey + f_lat * ly,
-                            f_long * ez + f_lat * lz, cx, cy, cz) < 0)
-                goto done;
+            queue_force(self, w->link, f_long * ex + f_lat * lx, f_long * ey + f_lat * ly,
+                        f_long * ez + f_lat * lz, cx, cy, cz);
             if (self->multi_pass && multi_pass(self, k, res, load, v_long, &res) < 0)
-                goto done;
+                return -1;
             double r_k, u_k;
             rut_resistance(res, w->rut, v_long * dt, v_long, stick, w->rut_damping, &r_k, &u_k);
             w->rut = u_k;
@@ -696,9 +933,9 @@ static int loop_step(WheelLoop *self)
         } else {
             double fx, fy, res;
             if (kernel_eval(&w->kernel, 0.0, 0.0, load, &fx, &fy, &res) < 0)
-                goto done;
+                return -1;
             if (self->multi_pass && multi_pass(self, k, res, load, v_long, &res) < 0)
-                goto done;
+                return -1;
             double v_side = vx * lx + vy * ly + vz * lz;
             double vel[3] = {v_long * ex + v_side * lx, v_long * ey + v_side * ly,
                              v_long * ez + v_side * lz};
@@ -713,16 +950,38 @@ static int loop_step(WheelLoop *self)
             force[2] = -r[2];
         }
         w->force[0] = force[0]; w->force[1] = force[1]; w->force[2] = force[2];
-        if (r_abs != 0.0
-            && apply_force(self, w->link, force[0], force[1], force[2], px, py, pz) < 0)
-            goto done;
+        if (r_abs != 0.0)
+            queue_force(self, w->link, force[0], force[1], force[2], px, py, pz);
     }
-    rc = 0;
-done:
-    Py_DECREF(contacts);
-    Py_DECREF(links);
-    Py_XDECREF(joints);
-    return rc;
+    return submit_forces(self, sm);
+}
+
+/* bind_native(pybullet_path, clients_offset, n_clients, anchor_offset): read PyBullet through
+ * Bullet's C API from the next substep on, verified against the Python API first. */
+static PyObject *loop_bind_native(WheelLoop *self, PyObject *args)
+{
+    const char *path;
+    unsigned long long clients_offset, anchor_offset;
+    long n_clients;
+    if (!PyArg_ParseTuple(args, "sKlK", &path, &clients_offset, &n_clients, &anchor_offset))
+        return NULL;
+    if (self->client < 0 || self->client >= n_clients) {
+        PyErr_Format(PyExc_ValueError, "client %ld outside pybullet's table of %ld", self->client,
+                     n_clients);
+        return NULL;
+    }
+    BulletApi api;
+    if (bullet_api_bind(&api, path, clients_offset, anchor_offset) < 0)
+        return NULL;
+    if (bullet_client(&api, self->client) == NULL) {
+        PyErr_Format(PyExc_OSError, "client %ld is not in pybullet's client table at offset "
+                     "%llu", self->client, clients_offset);
+        return NULL;
+    }
+    self->api = api;
+    self->bound = self->native = self->verify = 1;
+    self->mismatch = 0;
+    Py_RETURN_NONE;
 }
 
 static PyObject *loop_apply(WheelLoop *self, PyObject *unused)
@@ -777,6 +1036,38 @@ static int set_chassis_contact(WheelLoop *self, PyObject *value, void *closure)
     return 0;
 }
 
+static PyObject *get_native(WheelLoop *self, void *closure)
+{
+    return PyBool_FromLong(self->native);
+}
+
+static int set_native(WheelLoop *self, PyObject *value, void *closure)
+{
+    int v = value ? PyObject_IsTrue(value) : 0;
+    if (v < 0)
+        return -1;
+    if (v && !self->bound) {
+        PyErr_SetString(PyExc_ValueError, "native queries are not bound (bind_native)");
+        return -1;
+    }
+    if (v && !self->native) {
+        self->verify = 1;
+        self->mismatch = 0;
+    }
+    self->native = v;
+    return 0;
+}
+
+static PyObject *get_native_verified(WheelLoop *self, void *closure)
+{
+    return PyBool_FromLong(self->native && !self->verify);
+}
+
+static PyObject *get_native_mismatch(WheelLoop *self, void *closure)
+{
+    return PyBool_FromLong(self->mismatch);
+}
+
 static PyGetSetDef loop_getset[] = {
     {"s", (getter)get_s, NULL, "slip ratio per wheel", NULL},
     {"b", (getter)get_b, NULL, "tan of the slip angle per wheel", NULL},
@@ -790,6 +1081,13 @@ static PyGetSetDef loop_getset[] = {
     {"resistance_force_n", (getter)get_force, NULL, "applied resistance force [N]", NULL},
     {"chassis_contact", (getter)get_chassis_contact, (setter)set_chassis_contact,
      "a body other than a wheel touched the ground", NULL},
+    {"native", (getter)get_native, (setter)set_native,
+     "PyBullet is read through Bullet's C API (bind_native), not its Python API", NULL},
+    {"native_verified", (getter)get_native_verified, NULL,
+     "the native readings matched the Python API's bit for bit on a substep with contact", NULL},
+    {"native_mismatch", (getter)get_native_mismatch, NULL,
+     "the native readings differed from the Python API's, so the loop uses the Python API",
+     NULL},
     {NULL, NULL, NULL, NULL, NULL},
 };
 
@@ -801,6 +1099,9 @@ static PyMethodDef loop_methods[] = {
     {"reset", (PyCFunction)loop_reset, METH_NOARGS, "Zero every wheel's state."},
     {"apply", (PyCFunction)loop_apply, METH_NOARGS,
      "One substep's forces: query PyBullet, compute, apply."},
+    {"bind_native", (PyCFunction)loop_bind_native, METH_VARARGS,
+     "bind_native(pybullet_path, clients_offset, n_clients, anchor_offset): read PyBullet "
+     "through Bullet's C API (slipenv.sim.bullet_native)."},
     {NULL, NULL, 0, NULL},
 };
 

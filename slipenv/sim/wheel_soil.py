@@ -1,6 +1,7 @@
 """Inject the terramechanic force law at every wheel contact, every physics substep.
 
-Per substep: one batched query each for contacts, wheel link states and spin-joint states;
+Per substep: one batched query each for contacts, wheel link states and spin-joint states (in
+the compiled loop, the same server commands through Bullet's C API, `native_queries`);
 per wheel, the contact frame, the slip state, the force law and the soil dampers in plain float
 arithmetic (tiny numpy arrays per wheel cost more than the physics, DESIGN §6); one
 ``applyExternalForce`` per loaded wheel at its contact patch and one at its centre for the
@@ -36,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from slipenv.pybullet_quiet import import_pybullet
+from slipenv.sim.bullet_native import PYBULLET_API_ENV, client_table, python_api_forced
 from slipenv.sim.compiled import wheel_loop_module
 from slipenv.terramechanics.bekker import rut_following_compaction_n, rut_load_ratio
 from slipenv.terramechanics.contact import ContactGeometry
@@ -141,6 +143,13 @@ class WheelSoilInjector:
         and the force model is one of slipenv's (`ForceModel.kernel_constants`), True to
         require it (ValueError if it cannot), False for the Python loop
         (`slipenv.sim.compiled`).
+    native_queries : bool or None
+        With the compiled loop, read PyBullet and apply the forces through Bullet's C API,
+        which pybullet exports, instead of through pybullet's Python functions
+        (`slipenv.sim.bullet_native`): the same server commands without building tuples. The
+        loop checks its first native readings against the Python API bit for bit and keeps the
+        Python API if they differ. None (default) when available and ``SLIPENV_PYBULLET_API``
+        is not set, True to require it (ValueError if it cannot), False for the Python API.
     """
 
     def __init__(
@@ -160,6 +169,7 @@ class WheelSoilInjector:
         multi_pass: bool = False,
         compiled: bool | None = None,
         castor_own_geometry: bool = False,
+        native_queries: bool | None = None,
     ) -> None:
         for key, value in (("dt_s", dt_s), ("min_relaxation_m", min_relaxation_m),
                            ("resistance_stick_m", resistance_stick_m),
@@ -197,6 +207,7 @@ class WheelSoilInjector:
         self.leaders = _rut_leaders(spec) if self.multi_pass else [(-1, -1)] * self.n
         self._models = _wheel_models(spec, force_model, castor_own_geometry)
         self._loop = self._compiled_loop(compiled)
+        self._bind_native(native_queries)
         if self._loop is not None:
             # The substep is the C loop itself: no Python frame per substep.
             self.apply = self._loop.apply  # type: ignore[method-assign]
@@ -220,6 +231,32 @@ class WheelSoilInjector:
         return module.WheelLoop(p, self.body_id, self.ground_id, self.client, list(self.links),
                                 list(self.spin_joints), self.dt_s, self.resistance_stick_m,
                                 self.damping_speed_mps, self.low_speed_mps, self.multi_pass)
+
+    def _bind_native(self, native_queries: bool | None) -> None:
+        """Switch the compiled loop to Bullet's C API (`native_queries`)."""
+        if native_queries is False:
+            return
+        table = None if self._loop is None or python_api_forced() else client_table()
+        if table is not None:
+            try:
+                self._loop.bind_native(*table)
+                return
+            except OSError as exc:
+                reason = str(exc)
+        elif self._loop is None:
+            reason = "the compiled loop is not running"
+        elif python_api_forced():
+            reason = f"{PYBULLET_API_ENV} is set"
+        else:
+            reason = "pybullet's client table was not found in its symbol table"
+        if native_queries:
+            raise ValueError(f"native_queries=True but native PyBullet access is unavailable "
+                             f"({reason})")
+
+    @property
+    def native_queries(self) -> bool:
+        """True if the substeps read PyBullet through Bullet's C API (`native_queries`)."""
+        return self._loop is not None and bool(self._loop.native)
 
     # The per-wheel state and the last substep's values live in the compiled loop when it runs
     # (read here as lists), else in the Python attributes of the same names with a "_".

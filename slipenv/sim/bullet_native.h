@@ -1,0 +1,158 @@
+/* Native access to a pybullet physics client through Bullet's C API (issue 15 item 2).
+ *
+ * pybullet's Python functions are thin wrappers over Bullet's client C API
+ * (examples/SharedMemory/PhysicsClientC_API.h): each one builds a command, submits it to the
+ * physics server and turns the status into Python tuples. The module exports that C API
+ * (b3InitRequestContactPointInformation, b3GetLinkState, b3ApplyExternalForce, ...), so a kernel
+ * can submit the same commands and read the same doubles without building any Python object.
+ * The one thing it needs is the client handle behind a client id, which pybullet keeps in its
+ * static table sPhysicsClients1; slipenv.sim.bullet_native finds that table's offset in the
+ * module's ELF symbol table and passes it here.
+ *
+ * The structs below mirror SharedMemoryPublic.h of the pybullet 3.2.x releases. A layout that
+ * does not match cannot go unnoticed: the loop compares its first native readings with the
+ * Python API's, bit for bit, and falls back to the Python API if they differ
+ * (WheelLoop.native_verified).
+ */
+#ifndef SLIPENV_BULLET_NATIVE_H
+#define SLIPENV_BULLET_NATIVE_H
+
+#ifndef _WIN32
+#ifndef _GNU_SOURCE
+#define _GNU_SOURCE /* dladdr */
+#endif
+#include <dlfcn.h>
+#define BULLET_NATIVE_AVAILABLE 1
+#else
+#define BULLET_NATIVE_AVAILABLE 0
+#endif
+
+typedef void *b3Handle;
+
+struct b3ContactPointData {
+    int m_contactFlags;
+    int m_bodyUniqueIdA;
+    int m_bodyUniqueIdB;
+    int m_linkIndexA;
+    int m_linkIndexB;
+    double m_positionOnAInWS[3];
+    double m_positionOnBInWS[3];
+    double m_contactNormalOnBInWS[3];
+    double m_contactDistance;
+    double m_normalForce;
+    double m_linearFrictionForce1;
+    double m_linearFrictionForce2;
+    double m_linearFrictionDirection1[3];
+    double m_linearFrictionDirection2[3];
+};
+
+struct b3ContactInformation {
+    int m_numContactPoints;
+    struct b3ContactPointData *m_contactPointData;
+};
+
+struct b3LinkState {
+    double m_worldPosition[3];
+    double m_worldOrientation[4];
+    double m_localInertialPosition[3];
+    double m_localInertialOrientation[4];
+    double m_worldLinkFramePosition[3];
+    double m_worldLinkFrameOrientation[4];
+    double m_worldLinearVelocity[3];
+    double m_worldAngularVelocity[3];
+    double m_worldAABBMin[3];
+    double m_worldAABBMax[3];
+};
+
+struct b3JointSensorState {
+    double m_jointPosition;
+    double m_jointVelocity;
+    double m_jointForceTorque[6];
+    double m_jointMotorTorque;
+};
+
+typedef struct {
+    b3Handle *clients; /* pybullet's sPhysicsClients1 */
+    int (*can_submit)(b3Handle);
+    b3Handle (*submit)(b3Handle, b3Handle);
+    int (*status_type)(b3Handle);
+    b3Handle (*init_contacts)(b3Handle);
+    void (*filter_body_a)(b3Handle, int);
+    void (*filter_body_b)(b3Handle, int);
+    void (*contacts)(b3Handle, struct b3ContactInformation *);
+    b3Handle (*init_state)(b3Handle, int);
+    int (*link_velocity)(b3Handle, int);
+    int (*link_state)(b3Handle, b3Handle, int, struct b3LinkState *);
+    int (*joint_state)(b3Handle, b3Handle, int, struct b3JointSensorState *);
+    b3Handle (*init_force)(b3Handle);
+    void (*force)(b3Handle, int, int, const double *, const double *, int);
+} BulletApi;
+
+/* Bind `api` to the loaded pybullet module at `path`: its exported C API, and its client
+ * table at `clients_offset` from the module's load address (`anchor_offset` is the symbol
+ * offset of b3CanSubmitCommand, whose address gives the load address). 0 on success, -1 with
+ * a Python OSError set. */
+static int bullet_api_bind(BulletApi *api, const char *path, unsigned long long clients_offset,
+                           unsigned long long anchor_offset)
+{
+#if BULLET_NATIVE_AVAILABLE
+    void *lib = dlopen(path, RTLD_NOW | RTLD_NOLOAD);
+    if (lib == NULL) {
+        PyErr_Format(PyExc_OSError, "pybullet is not loaded from %s", path);
+        return -1;
+    }
+#define BIND(FIELD, NAME)                                                                  \
+    do {                                                                                   \
+        void *sym = dlsym(lib, NAME);                                                      \
+        if (sym == NULL) {                                                                 \
+            dlclose(lib);                                                                  \
+            PyErr_Format(PyExc_OSError, "%s does not export %s", path, NAME);              \
+            return -1;                                                                     \
+        }                                                                                  \
+        *(void **)(&api->FIELD) = sym;                                                     \
+    } while (0)
+    BIND(can_submit, "b3CanSubmitCommand");
+    BIND(submit, "b3SubmitClientCommandAndWaitStatus");
+    BIND(status_type, "b3GetStatusType");
+    BIND(init_contacts, "b3InitRequestContactPointInformation");
+    BIND(filter_body_a, "b3SetContactFilterBodyA");
+    BIND(filter_body_b, "b3SetContactFilterBodyB");
+    BIND(contacts, "b3GetContactPointInformation");
+    BIND(init_state, "b3RequestActualStateCommandInit");
+    BIND(link_velocity, "b3RequestActualStateCommandComputeLinkVelocity");
+    BIND(link_state, "b3GetLinkState");
+    BIND(joint_state, "b3GetJointState");
+    BIND(init_force, "b3ApplyExternalForceCommandInit");
+    BIND(force, "b3ApplyExternalForce");
+#undef BIND
+    char *base = (char *)*(void **)(&api->can_submit) - anchor_offset;
+    /* The offsets come from the file at `path`; the loaded module must be that file. */
+    Dl_info info;
+    if (!dladdr(*(void **)(&api->can_submit), &info) || (char *)info.dli_fbase != base) {
+        dlclose(lib);
+        PyErr_Format(PyExc_OSError, "the pybullet module loaded is not the file %s", path);
+        return -1;
+    }
+    api->clients = (b3Handle *)(base + clients_offset);
+    /* pybullet's own import holds the module loaded; drop the reference dlopen added. */
+    dlclose(lib);
+    return 0;
+#else
+    (void)api; (void)path; (void)clients_offset; (void)anchor_offset;
+    PyErr_SetString(PyExc_OSError, "native PyBullet access is not built on this platform");
+    return -1;
+#endif
+}
+
+/* The handle of client `client`, or NULL (no Python error set) if it is not connected. */
+static b3Handle bullet_client(const BulletApi *api, long client)
+{
+    if (client < 0 || client >= 1024) /* pybullet's MAX_PHYSICS_CLIENTS */
+        return NULL;
+    b3Handle sm = api->clients[client];
+    if (sm == NULL || !api->can_submit(sm))
+        return NULL;
+    return sm;
+}
+
+#endif
