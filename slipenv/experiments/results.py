@@ -1,9 +1,10 @@
-"""Writing an experiment's result: standard JSON, and the figures' file names."""
+"""Writing an experiment's result: standard JSON, the printed table, the figures and the page."""
 
 from __future__ import annotations
 
 import json
 import math
+from collections.abc import Callable, Sequence
 from pathlib import Path as FsPath
 from typing import Any
 
@@ -34,3 +35,19 @@ def write_json(result: dict, json_path: str | FsPath) -> FsPath:
     with open(out, "w") as fh:
         json.dump(finite(result), fh, indent=2)
     return out
+
+
+def publish(result: dict, table: str, figures: Sequence[str | FsPath],
+            json_path: str | FsPath | None, docs_dir: str | FsPath | None,
+            write_page: Callable[[dict, Any, Any], FsPath], notes: Sequence[str] = ()) -> None:
+    """How every ``slipenv reproduce`` ends: print the paper-vs-simulation `table` and where
+    the `figures` went (and any `notes`), write the result as JSON to `json_path` and the docs
+    page with `write_page(result, figures, docs_dir)`, each when asked."""
+    print(table)
+    print("figures: " + ", ".join(str(f) for f in figures))
+    for line in notes:
+        print(line)
+    if json_path:
+        print(f"metrics: {write_json(result, json_path)}")
+    if docs_dir is not None:
+        print(f"page: {write_page(result, figures, docs_dir)}")

@@ -12,6 +12,7 @@ from typing import Any
 from slipenv.paths import Path, path_by_name
 
 from ..progress import iterate
+from ..results import publish
 from . import plots, report
 from .calibration import calibrate
 from .docs import write_results_page
@@ -141,11 +142,7 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_lindgren",
                                                    for k in FIELD_NOISE},
                                     "calibration": robust.calibration}},
               "run_time_s": time.perf_counter() - start}
-    print(report.format_table(metrics, PAPER, result["targets"], result["run_time_s"],
-                              result["targets_robust"]))
-    print("plots: " + ", ".join(str(p) for p in saved))
-    if json_path:
-        print(f"written: {report.write_json(result, json_path)}")
-    if docs_dir is not None:
-        print(f"page: {write_results_page(result, saved, docs_dir)}")
+    publish(result, report.format_table(metrics, PAPER, result["targets"], result["run_time_s"],
+                                        result["targets_robust"]),
+            saved, json_path, docs_dir, write_results_page)
     return result

@@ -14,7 +14,7 @@ from slipenv.testbed.slip_curve import fit_slip_ratio_for_slope
 from slipenv.vehicles.presets import rover_4ws
 
 from ..progress import iterate
-from ..results import write_json
+from ..results import publish
 from .analysis import drive_metrics, fit_slip_model, replay, rms, score_ftrace, windowed_truth
 from .docs import write_results_page
 from .drive import drive
@@ -124,10 +124,5 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_reina", json_path: s
               "settings": {k: getattr(cfg, k) for k in cfg.__dataclass_fields__},
               "quick": quick, "seed": seed}
     figures = save_figures(out, drives, truths, odometries, fit)
-    print(format_table(result))
-    print("figures: " + ", ".join(str(f) for f in figures))
-    if json_path:
-        print(f"metrics: {write_json(result, json_path)}")
-    if docs_dir is not None:
-        print(f"page: {write_results_page(result, figures, docs_dir)}")
+    publish(result, format_table(result), figures, json_path, docs_dir, write_results_page)
     return result

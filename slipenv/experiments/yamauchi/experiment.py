@@ -14,7 +14,7 @@ from slipenv.estimators.skid_steer.identification import evaluate_runs, fit_slip
 from slipenv.vehicles.presets import tracked_patako
 
 from ..progress import iterate
-from ..results import write_json
+from ..results import publish
 from . import model_file
 from .circle import circle_episode, mean_episodes
 from .docs import world_options, write_results_page
@@ -247,13 +247,7 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
               "settings": {k: getattr(cfg, k) for k in cfg.__dataclass_fields__},
               "quick": quick, "seed": seed}
     figures = save_figures(out, cfg, geom, fits, ident["samples"], main, episodes, n_by_tilt)
-    print(format_table(result))
-    print("figures: " + ", ".join(str(f) for f in figures))
-    if model_out is not None:
-        print(f"model: {model_out}")
-    if json_path:
-        print(f"metrics: {write_json(result, json_path)}")
-    if docs_dir is not None:
-        print(f"page: {write_results_page(result, figures, docs_dir)}")
+    publish(result, format_table(result), figures, json_path, docs_dir, write_results_page,
+            notes=[f"model: {model_out}"] if model_out is not None else [])
     return result
 
