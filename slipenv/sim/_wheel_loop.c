@@ -971,7 +971,7 @@ static PyObject *loop_bind_native(WheelLoop *self, PyObject *args)
         return NULL;
     }
     BulletApi api;
-    if (bullet_api_bind(&api, path, clients_offset, anchor_offset) < 0)
+    if (bullet_api_bind(&api, path, clients_offset, n_clients, anchor_offset) < 0)
         return NULL;
     if (bullet_client(&api, self->client) == NULL) {
         PyErr_Format(PyExc_OSError, "client %ld is not in pybullet's client table at offset "

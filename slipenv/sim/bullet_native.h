@@ -73,6 +73,7 @@ struct b3JointSensorState {
 
 typedef struct {
     b3Handle *clients; /* pybullet's sPhysicsClients1 */
+    long n_clients;    /* its length (MAX_PHYSICS_CLIENTS) */
     int (*can_submit)(b3Handle);
     b3Handle (*submit)(b3Handle, b3Handle);
     int (*status_type)(b3Handle);
@@ -93,7 +94,7 @@ typedef struct {
  * offset of b3CanSubmitCommand, whose address gives the load address). 0 on success, -1 with
  * a Python OSError set. */
 static int bullet_api_bind(BulletApi *api, const char *path, unsigned long long clients_offset,
-                           unsigned long long anchor_offset)
+                           long n_clients, unsigned long long anchor_offset)
 {
 #if BULLET_NATIVE_AVAILABLE
     void *lib = dlopen(path, RTLD_NOW | RTLD_NOLOAD);
@@ -134,11 +135,12 @@ static int bullet_api_bind(BulletApi *api, const char *path, unsigned long long 
         return -1;
     }
     api->clients = (b3Handle *)(base + clients_offset);
+    api->n_clients = n_clients;
     /* pybullet's own import holds the module loaded; drop the reference dlopen added. */
     dlclose(lib);
     return 0;
 #else
-    (void)api; (void)path; (void)clients_offset; (void)anchor_offset;
+    (void)api; (void)path; (void)clients_offset; (void)n_clients; (void)anchor_offset;
     PyErr_SetString(PyExc_OSError, "native PyBullet access is not built on this platform");
     return -1;
 #endif
@@ -147,7 +149,7 @@ static int bullet_api_bind(BulletApi *api, const char *path, unsigned long long 
 /* The handle of client `client`, or NULL (no Python error set) if it is not connected. */
 static b3Handle bullet_client(const BulletApi *api, long client)
 {
-    if (client < 0 || client >= 1024) /* pybullet's MAX_PHYSICS_CLIENTS */
+    if (client < 0 || client >= api->n_clients)
         return NULL;
     b3Handle sm = api->clients[client];
     if (sm == NULL || !api->can_submit(sm))
