@@ -111,7 +111,7 @@ def candidates_from_segments(ground: np.ndarray, wheel_xy_m: tuple[float, float]
             offset.append(0.5 * (e_a + offset_at_wheel(b["theta"], b["mid"])))
             mismatch.append(abs(separation / wheel_width_m - 1.0))
             length.append(0.5 * (len_a + len_b))
-            lines.append(np.vstack([line_a, [*b["normal"], b["c"]]]))
+            lines.append(np.array([line_a[0], [*b["normal"], b["c"]]]))  # (np.vstack's)
     return Candidates(np.array(angle), np.array(offset), np.array(mismatch), np.array(length),
                       lines)
 
@@ -139,13 +139,15 @@ def refine_angle(edges: np.ndarray, camera: PinholeCamera, ground_z_m: float,
     if len(uv) < 10:
         return angle_rad
     pts = camera.image_to_ground(uv, ground_z_m)
+    # the x and y columns as contiguous arrays, read once per line per iteration below
+    px, py = np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1])
     lines = np.array(edge_lines, dtype=float).reshape(-1, 3)
     angle = angle_rad
     for _ in range(iterations):
         centred, means = [], []
         for nx, ny, c in lines:
-            near = np.abs(pts[:, 0] * nx + pts[:, 1] * ny - c) < band_m
-            if near.sum() >= 10:
+            near = np.abs(px * nx + py * ny - c) < band_m
+            if np.count_nonzero(near) >= 10:
                 group = pts[near]
                 means.append(group.mean(axis=0))
                 centred.append(group - means[-1])

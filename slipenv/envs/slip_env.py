@@ -38,6 +38,37 @@ from slipenv.vehicles.kinematics import twist_to_commands
 from slipenv.vehicles.spec import VehicleSpec
 
 
+def _checked_action(action: Any) -> tuple[float, float]:
+    """The action's two values as floats, checked as :func:`check_action` checks them.
+
+    A float32 or float64 array of shape (2,) with finite values (what agents send) is read
+    directly: ``tolist`` gives the same doubles as ``astype(np.float64)``; anything else goes
+    through ``check_action`` (its errors name the problem).
+    """
+    if type(action) is np.ndarray and action.shape == (2,) and action.dtype in _FAST_DTYPES:
+        a0, a1 = action.tolist()
+        if math.isfinite(a0) and math.isfinite(a1):
+            return a0, a1
+    a0, a1 = check_action(action).tolist()
+    return a0, a1
+
+
+_FAST_DTYPES = (np.dtype(np.float32), np.dtype(np.float64))
+
+
+def _columns(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.column_stack((a, b))`` of two vectors, without its generic checks."""
+    out = np.empty((len(a), 2), dtype=np.result_type(a, b))
+    out[:, 0] = a
+    out[:, 1] = b
+    return out
+
+
+def _as_float32(value: float) -> float:
+    """``value`` rounded to float32, as a float."""
+    return float(np.float32(value))
+
+
 def render_modes() -> list[str]:
     """``["rgb_array"]``, plus ``"human"`` where a display is available (the GUI needs one)."""
     headless = sys.platform.startswith("linux") and not os.environ.get("DISPLAY")
@@ -247,20 +278,21 @@ class SlipEnv(gym.Env):
             self._camera_step(truth)
         self._steps = 0
         self._s_est = self._s_true = 0.0
-        self._last_action = np.zeros(2, dtype=np.float32)
+        self._last_action = (0.0, 0.0)  # the last clipped action, rounded to float32
         self._trace, self._trace_est = [], []
         self._record(truth, estimate)
         obs = self._observe(estimate)
         return obs, self._info(truth, estimate, frame, {})
 
     def step(self, action):
-        action = check_action(action)
+        a0, a1 = _checked_action(action)
         if self.estimator is None:
             raise RuntimeError("call reset() before step()")
-        a = np.clip(action, -1.0, 1.0)
+        # clipped to [-1, 1] as np.clip would (the values are finite)
+        a0, a1 = min(max(a0, -1.0), 1.0), min(max(a1, -1.0), 1.0)
         spec = self._vehicle
         speeds, steer = twist_to_commands(
-            spec, float(a[0]) * spec.max_speed_mps, float(a[1]) * spec.max_yaw_rate_rad_s
+            spec, a0 * spec.max_speed_mps, a1 * spec.max_yaw_rate_rad_s
         )
         self._steps += 1
         try:
@@ -282,15 +314,18 @@ class SlipEnv(gym.Env):
         gained = max(proj.s - self._s_true, 0.0)
         self._s_true = proj.s
         heading_err = wrap_angle(truth.yaw_rad - proj.heading_rad)
+        # |Δaction|^2 against the last action as the float32 the agent's array held; in floats,
+        # summed as np.sum sums two float64 values (the first, then the second added to it)
+        d0, d1 = a0 - self._last_action[0], a1 - self._last_action[1]
         terms = {
             "cross_track": -(proj.cross_track_m**2),
             "heading": -(heading_err**2),
             "progress": gained / max(proj.speed_mps * self._dt_s, 1e-6),
-            "effort": -float(np.sum((a - self._last_action) ** 2)),
+            "effort": -(d0 * d0 + d1 * d1),
         }
         weights = self.config.reward_weights
         reward = float(sum(weights.get(k, 0.0) * v for k, v in terms.items()))
-        self._last_action = a.astype(np.float32)
+        self._last_action = (_as_float32(a0), _as_float32(a1))
         done_path = self._s_true >= self._path.length_m - 1e-3
         lost = abs(proj.cross_track_m) > self.config.max_cross_track_m
         truncated = self._steps >= self.max_steps and not (done_path or lost)
@@ -394,7 +429,7 @@ class SlipEnv(gym.Env):
             "wheel_slip": contact.slip,
             "wheel_slip_angle_rad": np.arctan(contact.tan_beta),
             "wheel_load_n": contact.load_n,
-            "wheel_force_n": np.column_stack((contact.fx_n, contact.fy_n)),
+            "wheel_force_n": _columns(contact.fx_n, contact.fy_n),
             "wheel_resistance_n": contact.resistance_n,
             "wheel_damper_n": contact.damper_n,
             "estimated_pose": np.array([estimate.x_m, estimate.y_m, estimate.yaw_rad]),

@@ -22,6 +22,7 @@ CONTINUITY_TOL_M = 1e-6  # [m] largest gap allowed between one segment's end and
 CONTINUITY_TOL_RAD = 1e-6  # [rad] largest heading jump allowed at a joint (no corners)
 CONTINUITY_TOL_MPS = 1e-9  # [m/s] largest jump of the reference speed at a joint
 MAX_SEARCH_WINDOW_M = 4.0  # [m] cap on the local search window of ``project``
+BOUNDS_MARGIN_M = 1e-9  # [m] segment boxes are grown by this (>> rounding of the curve points)
 
 
 class PathProjection(NamedTuple):
@@ -106,6 +107,9 @@ class Path:
             starts.append(starts[-1] + seg.length_m)
             t_starts.append(t_starts[-1] + seg.duration_s)
         self._starts, self._t_starts = starts, t_starts
+        # Per segment, its box grown by BOUNDS_MARGIN_M (None: no box): ``project`` skips a
+        # segment that cannot hold a nearer point than the best one so far.
+        self._boxes = [_grown(seg.bounds()) for seg in segs]
         self.length_m = starts[-1]
         self.duration_s = t_starts[-1]
         kappa_max = max(seg.max_abs_curvature_1pm for seg in segs)
@@ -180,11 +184,22 @@ class Path:
             s_hint = min(max(float(s_hint), 0.0), self.length_m)
             lo = max(s_hint - self.search_back_m, 0.0)
             hi = min(s_hint + self.search_ahead_m, self.length_m)
-        starts, segs = self._starts, self.segments
+        starts, segs, boxes = self._starts, self.segments, self._boxes
         i = min(bisect_right(starts, lo) - 1, len(segs) - 1)
         best: Nearest | None = None
         best_i = i
         while i < len(segs) and starts[i] <= hi:
+            box = boxes[i]
+            if best is not None and box is not None:
+                # Squared distance to the segment's (grown) box: a lower bound on any d2 the
+                # segment can return (exact arithmetic; the 1e-12 relative slack covers the
+                # rounding of both). Above the best d2 the segment cannot replace the best (it
+                # would need d2 < best.d2 - 1e-12), so skipping it leaves the result unchanged.
+                dx = max(box[0] - x, 0.0, x - box[2])
+                dy = max(box[1] - y, 0.0, y - box[3])
+                if (dx * dx + dy * dy) * (1.0 - 1e-12) > best.d2:
+                    i += 1
+                    continue
             s0 = starts[i]
             seg = segs[i]
             near = seg.nearest(x, y, max(lo - s0, 0.0), min(hi - s0, seg.length_m))
@@ -200,6 +215,14 @@ class Path:
     def sample(self, ds_m: float = 0.05) -> PathSamples:
         """Sample the path every ``ds_m`` [m] (both ends included); see :func:`sample_path`."""
         return sample_path(self, ds_m)
+
+
+def _grown(box: tuple[float, float, float, float] | None
+           ) -> tuple[float, float, float, float] | None:
+    if box is None:
+        return None
+    m = BOUNDS_MARGIN_M
+    return box[0] - m, box[1] - m, box[2] + m, box[3] + m
 
 
 def sample_path(path: Path, ds_m: float = 0.05) -> PathSamples:

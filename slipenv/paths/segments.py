@@ -73,6 +73,12 @@ class Segment(ABC):
     def max_abs_curvature_1pm(self) -> float:
         """Largest |curvature| along the segment [1/m]."""
 
+    def bounds(self) -> tuple[float, float, float, float] | None:
+        """An axis-aligned box ``(x_min, y_min, x_max, y_max)`` [m] holding every point of the
+        segment, or None if the segment gives none (:meth:`Path.project` then always searches
+        it). The box may be loose; it must never cut the segment."""
+        return None
+
     def heading(self, s: float) -> float:
         """Heading of the tangent at ``s`` [rad], in [-pi, pi] (atan2)."""
         tx, ty = self.tangent(s)
@@ -136,6 +142,10 @@ class Line(Segment):
     def max_abs_curvature_1pm(self) -> float:
         return 0.0
 
+    def bounds(self) -> tuple[float, float, float, float]:
+        (x0, y0), (x1, y1) = self.start, self.end
+        return min(x0, x1), min(y0, y1), max(x0, x1), max(y0, y1)
+
     def nearest(self, x: float, y: float, s_lo: float, s_hi: float) -> Nearest:
         ux, uy = self._u
         s = (x - self.start[0]) * ux + (y - self.start[1]) * uy
@@ -192,6 +202,10 @@ class Arc(Segment):
     def max_abs_curvature_1pm(self) -> float:
         return 1.0 / self.radius_m
 
+    def bounds(self) -> tuple[float, float, float, float]:
+        (cx, cy), r = self.center, self.radius_m  # the whole circle's box
+        return cx - r, cy - r, cx + r, cy + r
+
     def nearest(self, x: float, y: float, s_lo: float, s_hi: float) -> Nearest:
         r, sig = self.radius_m, self._sigma
         # The nearest point of the full circle lies at the query's polar angle; unroll it to
@@ -201,11 +215,11 @@ class Arc(Segment):
         if s_c < s_lo:
             s_c += r * TWO_PI * math.ceil((s_lo - s_c) / (r * TWO_PI))
         candidates = (s_c, s_lo, s_hi) if s_c <= s_hi else (s_lo, s_hi)
-        best: Nearest | None = None
+        best: tuple[float, float, float, float] | None = None  # (d2, s, px, py)
         for s in candidates:
             px, py = self.point(s)
             d2 = (x - px) ** 2 + (y - py) ** 2
-            if best is None or d2 < best.d2:
-                best = Nearest(d2, s, px, py, *self.tangent(s), sig / r)
+            if best is None or d2 < best[0]:
+                best = (d2, s, px, py)
         assert best is not None
-        return best
+        return Nearest(*best, *self.tangent(best[1]), sig / r)  # tangent of the winner only

@@ -125,6 +125,12 @@ class QuadraticSpline(Segment):
         t_min = min(max(-(ax * bx + ay * by) / bb, 0.0), 1.0) if bb > 0.0 else 0.0
         return abs(self._eval(t_min)[4])
 
+    def bounds(self) -> tuple[float, float, float, float]:
+        # A Bézier curve lies in the convex hull of its control points, so in their box.
+        xs, ys = (self.start[0], self.control[0], self.end[0]), (self.start[1], self.control[1],
+                                                                 self.end[1])
+        return min(xs), min(ys), max(xs), max(ys)
+
     def nearest(self, x: float, y: float, s_lo: float, s_hi: float) -> Nearest:
         # Window ends mapped to t by table interpolation (exact at 0 and L; a soft bound
         # elsewhere). Interior minima solve (B(t) - p) . B'(t) = 0, a cubic in t.

@@ -25,9 +25,16 @@ import math
 
 import numpy as np
 
-from slipenv.contracts.angles import wrap_angle, wrap_angles
+from slipenv.contracts.angles import TWO_PI, wrap_angle, wrap_angles
 
 FIELD_HALF_SIZE_M = 15.0  # half the side of the default square field [m] (assumed)
+
+
+def _wrap_in_place(angles: np.ndarray) -> None:
+    """:func:`wrap_angles` of a float array, written into it (the same operations)."""
+    np.subtract(np.pi, angles, out=angles)
+    np.mod(angles, TWO_PI, out=angles)
+    np.subtract(np.pi, angles, out=angles)
 
 
 def default_beacons_xy() -> np.ndarray:
@@ -209,28 +216,40 @@ class BeaconScanner:
         dyaw = wrap_angle(yaw_rad - yaw0)
         self._last = (t1, float(x_m), float(y_m), float(yaw_rad))
         dt = t1 - t0
-        # g(t) = ψ(t) - φ(t), taken linear over the interval; hits where g = 2π m
+        # g(t) = ψ(t) - φ(t), taken linear over the interval; hits where g = 2π m.
+        # This runs at every control step on every beacon: the arrays are updated in place
+        # (each expression keeps its operands and their order, so the values are the same).
         phi0 = self._body_bearings(x0, y0, yaw0)
         phi1 = self._body_bearings(float(x_m), float(y_m), yaw0 + dyaw)
-        dphi = wrap_angles(phi1 - phi0)
-        g0 = self.head_phase_rad + 2.0 * math.pi * self.scan_rate_hz * t0 - phi0
-        dg = 2.0 * math.pi * self.scan_rate_hz * dt - dphi
-        m_lo = np.floor(g0 / (2.0 * np.pi)) + 1.0
-        m_hi = np.floor((g0 + dg) / (2.0 * np.pi))
-        n_hits = np.maximum(m_hi - m_lo + 1.0, 0.0).astype(int) * (dg > 0.0)
-        if self.clutter_rate_hz == 0.0 and not n_hits.any():
+        dphi = np.subtract(phi1, phi0, out=phi1)
+        _wrap_in_place(dphi)
+        g0 = np.subtract(self.head_phase_rad + 2.0 * math.pi * self.scan_rate_hz * t0, phi0,
+                         out=phi0)
+        dg = np.subtract(2.0 * math.pi * self.scan_rate_hz * dt, dphi, out=dphi)
+        m_lo = np.floor(g0 / (2.0 * np.pi))
+        m_lo += 1.0
+        m_hi = np.add(g0, dg)
+        m_hi /= 2.0 * np.pi
+        np.floor(m_hi, out=m_hi)
+        # a beacon is swept past m_hi - m_lo + 1 times (whole numbers) if that is > 0 and dg > 0
+        hit = m_hi >= m_lo
+        hit &= dg > 0.0
+        if self.clutter_rate_hz == 0.0 and not hit.any():
             return np.zeros(0), np.zeros(0)  # the head swept past no beacon: nothing to draw
-        if n_hits.max() == 1:  # the usual case: each beacon swept past at most once
-            idx = np.flatnonzero(n_hits)
-            m = m_lo[idx]
-        else:
+        idx = hit.nonzero()[0]
+        m = m_lo[idx]
+        if not (m == m_hi[idx]).all():  # a beacon swept past more than once
+            n_hits = np.maximum(m_hi - m_lo + 1.0, 0.0).astype(int) * (dg > 0.0)
             idx = np.repeat(np.arange(len(self.beacons_xy)), n_hits)
             m = m_lo[idx] + (np.arange(len(idx)) - np.repeat(np.cumsum(n_hits) - n_hits, n_hits))
         frac = np.minimum(np.maximum((2.0 * np.pi * m - g0[idx]) / dg[idx], 0.0), 1.0)
-        times = np.maximum(t0 + frac * dt, math.nextafter(t0, math.inf))  # stay inside (t0, t1]
-        xs, ys = x0 + frac * (x_m - x0), y0 + frac * (y_m - y0)
-        yaws = yaw0 + frac * dyaw
-        dx, dy = self.beacons_xy[idx, 0] - xs, self.beacons_xy[idx, 1] - ys
+        # time and pose at each hit, a + frac (b - a) per column: (t, x, y, yaw)
+        at_hit = np.array((t0, x0, y0, yaw0)) + frac[:, None] * np.array((dt, x_m - x0,
+                                                                           y_m - y0, dyaw))
+        times = np.maximum(at_hit[:, 0], math.nextafter(t0, math.inf))  # inside (t0, t1]
+        yaws = at_hit[:, 3]
+        d = self.beacons_xy[idx] - at_hit[:, 1:3]
+        dx, dy = d[:, 0], d[:, 1]
         bearing = wrap_angles(np.arctan2(dy, dx) - yaws)
         seen = (np.hypot(dx, dy) <= self.max_range_m) & (np.abs(bearing) <= 0.5 * self.fov_rad)
         bearing, times = bearing[seen], times[seen]

@@ -36,8 +36,12 @@ class TorqueSensors:
         self.rel_std, self.scale = rel_std, scale
 
     def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> np.ndarray:
+        return self.from_normals(truth, rng.standard_normal(truth.channel_torque_nm.shape))
+
+    def from_normals(self, truth: VehicleTruth, e: np.ndarray) -> np.ndarray:
+        """The reading given one standard normal draw per channel, ``e``."""
         tq = truth.channel_torque_nm
-        noise = rng.standard_normal(tq.shape) * self.rel_std * (np.abs(tq) + 1e-3)
+        noise = e * self.rel_std * (np.abs(tq) + 1e-3)
         return self.scale * (tq + noise)
 
 
@@ -51,7 +55,10 @@ class Imu:
         self.bias = noise.gyro_bias_rad_s
 
     def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> tuple[float, float, float]:
-        e = rng.standard_normal(3)
+        return self.from_normals(truth, rng.standard_normal(3))
+
+    def from_normals(self, truth: VehicleTruth, e: np.ndarray) -> tuple[float, float, float]:
+        """The reading given three standard normal draws ``e`` (x, y, gyro)."""
         ax, ay, _ = truth.specific_force_body_mps2
         return (
             ax + self.std_ax * e[0],
@@ -67,7 +74,10 @@ class Inclinometer:
         self.std = std_rad
 
     def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> tuple[float, float]:
-        e = rng.standard_normal(2)
+        return self.from_normals(truth, rng.standard_normal(2))
+
+    def from_normals(self, truth: VehicleTruth, e: np.ndarray) -> tuple[float, float]:
+        """The reading given two standard normal draws ``e`` (roll, pitch)."""
         return truth.roll_rad + self.std * e[0], truth.pitch_rad + self.std * e[1]
 
 
@@ -78,7 +88,11 @@ class Compass:
         self.std = std_rad
 
     def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> float:
-        return wrap_angle(truth.yaw_rad + self.std * rng.standard_normal())
+        return self.from_normal(truth, rng.standard_normal())
+
+    def from_normal(self, truth: VehicleTruth, e: float) -> float:
+        """The reading given one standard normal draw ``e``."""
+        return wrap_angle(truth.yaw_rad + self.std * e)
 
 
 class SensorSuite:
@@ -111,10 +125,14 @@ class SensorSuite:
     def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> SensorFrame:
         """Read every sensor once (in a fixed order, so the random stream is reproducible)."""
         enc = self.encoders.measure(truth, rng)
-        torque = self.torque.measure(truth, rng)
-        ax, ay, gz = self.imu.measure(truth, rng)
-        roll, pitch = self.inclinometer.measure(truth, rng)
-        heading = self.compass.measure(truth, rng)
+        # The torque, IMU, inclinometer and compass noise in one draw: the generator gives
+        # the same numbers in the same order as one draw per sensor (torque, 3, 2, 1).
+        n = truth.channel_torque_nm.shape[0]
+        e = rng.standard_normal(n + 6)
+        torque = self.torque.from_normals(truth, e[:n])
+        ax, ay, gz = self.imu.from_normals(truth, e[n:n + 3])
+        roll, pitch = self.inclinometer.from_normals(truth, e[n + 3:n + 5])
+        heading = self.compass.from_normal(truth, float(e[n + 5]))
         bearings, times = np.zeros(0), np.zeros(0)
         if self.beacons is not None:
             x, y, _ = truth.position_m

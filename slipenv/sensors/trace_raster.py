@@ -11,6 +11,10 @@ import cv2
 import numpy as np
 
 _SHIFT = 4  # fixed-point bits for sub-pixel polyline vertices (cv2 ``shift``)
+EXACT_TRANSFORM_MIN_PIXELS = 1 << 14
+"""Smallest image (rows x columns) whose ``cv2.distanceTransform(DIST_L2, DIST_MASK_PRECISE)``
+is the exact Euclidean transform; below it OpenCV takes an approximate path (measured on
+OpenCV 5.0; ``tests/sensors/test_trace_raster_window.py`` checks both facts)."""
 
 
 def polyline_distance_px(uv_px: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray,
@@ -57,9 +61,13 @@ def polyline_distance_window(uv_px: np.ndarray, shape: tuple[int, int], reach_px
     The same distances and along-track coordinates, bit for bit, on the window of the image
     around the rasterised centreline padded by ``reach_px``: every pixel outside it lies
     farther than ``reach_px`` from the line. A rut covers a few percent of the frame, so the
-    caller's per-pixel work shrinks with the window (issue 15). The distance transform itself
-    still runs on the whole image: OpenCV's exact transform of a crop differs from the
-    whole image's in the last bit.
+    caller's per-pixel work shrinks with the window (issue 15). The distance transform runs on
+    a crop holding the window (so every zero pixel of the mask) of at least
+    ``EXACT_TRANSFORM_MIN_PIXELS``: OpenCV's precise L2 transform is then the exact Euclidean
+    one (float32 ``sqrt`` of the integer squared distance, Felzenszwalb & Huttenlocher), which
+    depends only on the zero pixels, so the crop's distances are the whole image's bit for bit.
+    Smaller images go through an approximate (IPP) path whose last bit depends on the image
+    size; there the whole image is transformed, as before.
 
     Returns
     -------
@@ -72,23 +80,52 @@ def polyline_distance_window(uv_px: np.ndarray, shape: tuple[int, int], reach_px
     uv = uv_px[np.all(np.isfinite(uv_px), axis=1)]
     if len(uv) < 2:
         return None
-    mask = np.full((rows, cols), 255, np.uint8)
+    # The centreline drawn as 255 on 0 (the transform's mask is its negative): OpenCV's
+    # bounding box of the nonzero pixels then replaces two whole-image scans.
+    line = np.zeros((rows, cols), np.uint8)
     pts = np.round(uv * (1 << _SHIFT)).astype(np.int32).reshape(-1, 1, 2)
-    cv2.polylines(mask, [pts], False, 0, 1, cv2.LINE_8, _SHIFT)
-    on_row, on_col = np.flatnonzero(mask.min(axis=1) == 0), np.flatnonzero(mask.min(axis=0) == 0)
-    if len(on_row) == 0:  # polyline outside the image
+    cv2.polylines(line, [pts], False, 255, 1, cv2.LINE_8, _SHIFT)
+    col0, row0, width, height = cv2.boundingRect(line)
+    if width == 0:  # polyline outside the image
         return None
-    dist = cv2.distanceTransform(mask, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
     pad = int(math.ceil(reach_px)) + 1
-    window = (slice(max(int(on_row[0]) - pad, 0), min(int(on_row[-1]) + pad + 1, rows)),
-              slice(max(int(on_col[0]) - pad, 0), min(int(on_col[-1]) + pad + 1, cols)))
+    window = (slice(max(row0 - pad, 0), min(row0 + height + pad, rows)),
+              slice(max(col0 - pad, 0), min(col0 + width + pad, cols)))
+    crop = _exact_transform_crop(window, shape)
+    dist = cv2.distanceTransform(cv2.bitwise_not(line[crop]), cv2.DIST_L2,
+                                 cv2.DIST_MASK_PRECISE)
+    # the window's rows and columns inside the crop
+    in_crop = (slice(window[0].start - crop[0].start, window[0].stop - crop[0].start),
+               slice(window[1].start - crop[1].start, window[1].stop - crop[1].start))
     direction = uv[-1] - uv[0]
     norm = float(np.hypot(*direction))
     direction = direction / norm if norm > 0 else np.array([1.0, 0.0])
     u = (np.arange(cols, dtype=np.float32) - np.float32(uv[0, 0]))[window[1]]
     v = (np.arange(rows, dtype=np.float32) - np.float32(uv[0, 1]))[window[0]]
     along = v[:, None] * np.float32(direction[1]) + u[None, :] * np.float32(direction[0])
-    return dist[window], along, window
+    return dist[in_crop], along, window
+
+
+def _exact_transform_crop(window: tuple[slice, slice], shape: tuple[int, int]
+                          ) -> tuple[slice, slice]:
+    """The smallest crop around ``window`` (grown across, then along the rows, centred where the
+    image allows) with at least ``EXACT_TRANSFORM_MIN_PIXELS``, or the whole image if it is
+    smaller than that (see :func:`polyline_distance_window`)."""
+    rows, cols = shape
+    if rows * cols < EXACT_TRANSFORM_MIN_PIXELS:
+        return slice(0, rows), slice(0, cols)
+
+    def grow(part: slice, size: int, extent: int) -> slice:
+        size = min(max(size, part.stop - part.start), extent)
+        start = min(max(part.start - (size - (part.stop - part.start)) // 2, 0), extent - size)
+        return slice(start, start + size)
+
+    r, c = window
+    height = r.stop - r.start
+    c = grow(c, -(-EXACT_TRANSFORM_MIN_PIXELS // height), cols)
+    width = c.stop - c.start
+    r = grow(r, -(-EXACT_TRANSFORM_MIN_PIXELS // width), rows)
+    return r, c
 
 
 def rut_height(q: np.ndarray, depth_m: float, grooves: np.ndarray) -> tuple[np.ndarray,
@@ -116,8 +153,12 @@ def fbm_noise(shape: tuple[int, int], rng: np.random.Generator, octaves: int = 5
     for k in range(octaves):
         n_r, n_c = 3 * 2 ** k, 4 * 2 ** k
         grid = rng.standard_normal((n_r, n_c)).astype(np.float32)
-        out += 0.55 ** k * cv2.resize(grid, (cols, rows), interpolation=cv2.INTER_CUBIC)
-    return out / max(float(out.std()), 1e-6)
+        octave = cv2.resize(grid, (cols, rows), interpolation=cv2.INTER_CUBIC)
+        # in place: the float32 product 0.55^k * octave, without one more frame
+        np.multiply(octave, 0.55 ** k, out=octave)
+        out += octave
+    out /= max(float(out.std()), 1e-6)
+    return out
 
 
 def soft_halfplane(shape: tuple[int, int], rng: np.random.Generator,

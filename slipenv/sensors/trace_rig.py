@@ -3,7 +3,7 @@
 :class:`TraceCameraRig` reads the wheels' contact points from the simulator after every control
 step (wheel centre minus the wheel radius straight down, and the Bekker static sinkage at the
 wheel's current load and soil as rut depth, Wong Eq. 5.x via
-:func:`slipenv.terramechanics.bekker.wheel_sinkage_m`), stores them in a
+:func:`slipenv.terramechanics.bekker.wheel_sinkage_float_m`), stores them in a
 :class:`~slipenv.sensors.trace_history.ContactHistory`, and renders a
 :class:`~slipenv.sensors.trace_camera.TraceFrame` whenever the 5 Hz camera is due (Reina §2, §4).
 Physics-notes §3 option (A): the image is rasterised from the true contact path.
@@ -23,7 +23,7 @@ import pybullet as p
 from slipenv.sensors.trace_camera import TraceCamera, TraceCameraConfig, TraceFrame
 from slipenv.sensors.trace_history import ContactHistory
 from slipenv.sim.simulator import Simulator, VehicleTruth
-from slipenv.terramechanics.bekker import wheel_sinkage_m
+from slipenv.terramechanics.bekker import wheel_sinkage_float_m
 
 
 def camera_config_for(sim: Simulator, wheel_name: str = "rear_left",
@@ -82,8 +82,9 @@ class TraceCameraRig:
         sink = np.zeros(len(load))
         for k in range(len(load)):
             soil = inj.soil_at_wheel(k)
-            sink[k] = float(wheel_sinkage_m(load[k], self._width[k], 2.0 * self._radius[k],
-                                            soil.k_c, soil.k_phi, soil.n_exp))
+            sink[k] = wheel_sinkage_float_m(float(load[k]), float(self._width[k]),
+                                       float(2.0 * self._radius[k]), float(soil.k_c),
+                                       float(soil.k_phi), float(soil.n_exp))
         points[load <= 0.0] = np.nan  # a wheel in the air leaves no trace
         if not np.isfinite(sink).all():  # (the check costs a fraction of nan_to_num)
             sink = np.nan_to_num(sink)

@@ -39,7 +39,11 @@ import numpy as np
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.bullet_native import PYBULLET_API_ENV, client_table, python_api_forced
 from slipenv.sim.compiled import wheel_loop_module
-from slipenv.terramechanics.bekker import rut_following_compaction_n, rut_load_ratio
+from slipenv.terramechanics.bekker import (
+    rut_following_compaction_n,
+    rut_load_ratio,
+    wheel_sinkage_float_m,
+)
 from slipenv.terramechanics.contact import ContactGeometry
 from slipenv.terramechanics.models import ForceModel, wheel_kernel
 from slipenv.terramechanics.slip_dynamics import (
@@ -621,8 +625,7 @@ def _wheel_sinkage_m(load_n: float, width_m: float, diameter_m: float,
     k_c, k_phi, n, deformable = bekker
     if deformable <= 0.0 or load_n <= 0.0:
         return 0.0
-    base = 3.0 * load_n / ((3.0 - n) * (k_c + width_m * k_phi) * math.sqrt(diameter_m))
-    return deformable * base ** (2.0 / (2.0 * n + 1.0))
+    return deformable * wheel_sinkage_float_m(load_n, width_m, diameter_m, k_c, k_phi, n)
 
 
 def _wheel_models(spec: VehicleSpec, force_model: ForceModel,

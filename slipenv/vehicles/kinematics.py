@@ -40,7 +40,8 @@ def twist_to_commands(
     else:
         half = spec.track_width_m / 2
         left, right = (v_mps - omega_rad_s * half) / r, (v_mps + omega_rad_s * half) / r
-        speeds = [left if i in spec.left_channels else right for i in range(len(spec.channels))]
+        lefts = spec.left_channels  # a computed property: once, not once per channel
+        speeds = [left if i in lefts else right for i in range(len(spec.channels))]
     peak = max(abs(s) for s in speeds)
     if peak > spec.max_wheel_speed_rad_s:
         scale = spec.max_wheel_speed_rad_s / peak

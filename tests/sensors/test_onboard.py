@@ -68,3 +68,23 @@ def test_negative_or_nan_noise_is_rejected(field):
         SensorNoise(**{field: -1.0})
     with pytest.raises(ValueError, match=field):
         SensorNoise(**{field: float("nan")})
+
+
+def test_the_suite_draws_what_each_sensor_would_draw_in_turn():
+    # the suite draws all its noise at once (issue 15): the frame must be the one the sensors
+    # give when each draws its own, in the suite's order, from the same generator state
+    noise = SensorNoise(torque_rel_std=0.05, compass_std_rad=0.02, incl_std_rad=0.01)
+    suite = SensorSuite(285.0, noise)
+    state = truth(yaw=3.1, torque=(10.0, -4.0, 7.5))
+    state = VehicleTruth(**{**vars(state), "channel_angle_rad": np.array([1.0, 2.0, 3.0])})
+    rng_suite, rng_each = np.random.default_rng(4), np.random.default_rng(4)
+    frame = suite.measure(state, rng_suite)
+    torque = suite.torque.measure(state, rng_each)
+    imu = suite.imu.measure(state, rng_each)
+    incl = suite.inclinometer.measure(state, rng_each)
+    heading = suite.compass.measure(state, rng_each)
+    np.testing.assert_array_equal(frame.wheel_torque_nm, torque)
+    assert (frame.acc_x_mps2, frame.acc_y_mps2, frame.gyro_z_rad_s) == imu
+    assert (frame.roll_rad, frame.pitch_rad) == incl
+    assert frame.heading_rad == heading and type(frame.heading_rad) is type(heading)
+    assert rng_suite.random() == rng_each.random()
