@@ -17,7 +17,11 @@ measured as ``1/rate(async, n=1) - 1/rate(single)``. With at least one free core
     total steps/s(n) ≈ n / (t_env + t_ipc),
 
 so the n = 1 row times the core count, minus nothing else while the parent's own work (one
-``step_wait`` per batch) stays small against ``t_env``. On this 2-core machine shared with
+``step_wait`` per batch) stays small against ``t_env``.
+
+Where ``t_ipc`` goes (``anatomy``): with one SB3 worker, the env's own ``step`` is timed inside
+the worker (wall and CPU time) and in this process; the rest of the round trip is the pipe,
+pickling and the two processes' wake-ups. On this 2-core machine shared with
 other jobs, n = 4 oversubscribes the cores and shows the cost of doing so.
 
 Run from the repository root::
@@ -72,6 +76,47 @@ def sb3_steps_per_s(env_id: str, n: int, steps: int) -> float:
         envs.close()
 
 
+class _StepClock(gym.Wrapper):
+    """Adds the env's own step time to ``info`` (``step_wall_us``, ``step_cpu_us``)."""
+
+    def step(self, action):
+        t0, c0 = time.perf_counter(), time.thread_time()
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        info = dict(info, step_wall_us=1e6 * (time.perf_counter() - t0),
+                    step_cpu_us=1e6 * (time.thread_time() - c0))
+        return obs, reward, terminated, truncated, info
+
+
+def anatomy(env_id: str, steps: int) -> dict[str, float]:
+    """Median µs per step with one env: SB3 ``SubprocVecEnv`` round trip, the env's own step
+    inside that worker (wall, CPU) and in this process (``DummyVecEnv``)."""
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+    out = {}
+    for name, cls in (("in_process", DummyVecEnv), ("worker", SubprocVecEnv)):
+        envs = cls([lambda: _StepClock(gym.make(env_id))])
+        try:
+            envs.seed(0)
+            envs.reset()
+            actions = BENCH_ACTION[None, :]
+            for _ in range(WARMUP_STEPS):
+                envs.step(actions)
+            trips, walls, cpus = [], [], []
+            for _ in range(steps):
+                t0 = time.perf_counter()
+                *_, infos = envs.step(actions)
+                trips.append(1e6 * (time.perf_counter() - t0))
+                if "step_wall_us" in infos[0]:  # (not on the step that resets)
+                    walls.append(infos[0]["step_wall_us"])
+                    cpus.append(infos[0]["step_cpu_us"])
+        finally:
+            envs.close()
+        out[f"{name}_round_trip_us"] = statistics.median(trips)
+        out[f"{name}_step_wall_us"] = statistics.median(walls)
+        out[f"{name}_step_cpu_us"] = statistics.median(cpus)
+    return {k: round(v, 1) for k, v in out.items()}
+
+
 def run(env_id: str, steps: int = 200, repeats: int = 3) -> dict:
     samples: dict[str, list[float]] = {"single": []}
     for n in PROCESSES:
@@ -94,6 +139,7 @@ def run(env_id: str, steps: int = 200, repeats: int = 3) -> dict:
         "t_ipc_us": {"gym_async": round(1e6 * t_ipc_gym, 1),
                      "sb3_subproc": round(1e6 * t_ipc_sb3, 1)},
         "model_gym_async_env_steps_per_s": model,
+        "anatomy_us": anatomy(env_id, 2 * steps),
     }
 
 
@@ -115,6 +161,12 @@ def main(argv: list[str] | None = None) -> None:
     print("model, n workers on n free cores (gym async): "
           + ", ".join(f"{k.replace('_', ' ')}: {v:.0f}/s"
                       for k, v in r["model_gym_async_env_steps_per_s"].items()))
+    a = r["anatomy_us"]
+    print(f"one SB3 worker: round trip {a['worker_round_trip_us']:.0f} us per step, of which "
+          f"the env's own step {a['worker_step_wall_us']:.0f} us (CPU "
+          f"{a['worker_step_cpu_us']:.0f}); the same step in this process "
+          f"{a['in_process_step_wall_us']:.0f} us (round trip through DummyVecEnv "
+          f"{a['in_process_round_trip_us']:.0f} us)")
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(r, fh, indent=2)
