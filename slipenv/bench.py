@@ -36,6 +36,12 @@ Three more figures per env (issue 15):
   and ``total``, in microseconds per control step; times are exclusive (a timed call inside
   another, the path projection inside the observation, is counted once). The timers add
   ~0.3 µs per call, so this rollout is not the one the ratio is taken from.
+* ``injection_parts_us_per_substep``: from the same rollout, the compiled wheel loop's own
+  timing of its substeps (``WheelLoop.timings``), in microseconds per substep: ``read`` (the
+  contact, link and joint queries, through Bullet's C API when ``native_queries`` is true,
+  `slipenv.sim.bullet_native`), ``force_law`` (contact frames, slip states, force law, dampers
+  and resistance) and ``apply`` (the ``applyExternalForce`` commands); None without the
+  compiled loop.
 * ``vec_env_steps_per_s``: total env steps/s of ``gymnasium.make_vec(id, VEC_PROCESSES,
   vectorization_mode="async")`` (one env per process, constant action, after a warm-up).
 
@@ -155,8 +161,11 @@ def bench_env(env_id: str, steps: int = 200, repeats: int = 5, vec: bool = True)
             "realtime_factor": round(env_rate * base.control_dt_s, 2),
             "coulomb_env_steps_per_s": round(coulomb_rate, 2),
             "vs_coulomb": round(env_rate / coulomb_rate, 3),
-            "breakdown_us_per_step": step_breakdown(env, steps),
         }
+        result["breakdown_us_per_step"], parts = step_breakdown_and_parts(env, steps)
+        result["injection_parts_us_per_substep"] = parts
+        result["native_queries"] = bool(getattr(getattr(_internal(base, "_sim"), "injector", None),
+                                                "native_queries", False))
     finally:
         env.close()
     if vec:
@@ -242,6 +251,9 @@ class _Timers:
         return timed
 
 
+_CLASS_METHOD = object()  # marks an attribute the instance did not hold itself
+
+
 def _internal(obj, name: str):
     """An attribute the benchmark instruments although it is not public API (the env's
     simulator, sensors and observation): read by name so the layering test's rule against
@@ -256,19 +268,46 @@ class _BreakdownRecorder:
     def __init__(self, timers: _Timers, warmup_steps: int = WARMUP_STEPS) -> None:
         self.timers, self.warmup_steps = timers, warmup_steps
         self.steps, self._seen, self._t0, self.elapsed_s = 0, 0, 0.0, 0.0
-        self.wrapped: list[tuple[object, str]] = []
+        self.wrapped: list[tuple[object, str, object]] = []
+        self.loops: list = []  # the compiled wheel loops timed since the warm-up ended
+        self._injector = None
 
     def instrument(self, obj, name: str, key: str) -> None:
         if obj is None or not hasattr(obj, name):
             return
+        own = vars(obj).get(name, _CLASS_METHOD)  # e.g. the injector's compiled `apply`
         setattr(obj, name, self.timers.wrap(getattr(obj, name), key))
-        self.wrapped.append((obj, name))
+        self.wrapped.append((obj, name, own))
 
     def unwrap(self) -> None:
-        for obj, name in self.wrapped:
-            with contextlib.suppress(AttributeError):
-                delattr(obj, name)  # the instance attribute hid the class's method
+        for obj, name, own in self.wrapped:
+            if own is _CLASS_METHOD:
+                with contextlib.suppress(AttributeError):
+                    delattr(obj, name)  # the instance attribute hid the class's method
+            else:
+                setattr(obj, name, own)
         self.wrapped.clear()
+        for loop in self.loops:
+            loop.timing = False
+
+    def time_loop_parts(self, injector) -> None:
+        """Have the injector's compiled loop time its substeps' parts (`injection_parts`)."""
+        loop = getattr(injector, "_loop", None)
+        if loop is not None and hasattr(loop, "timing"):
+            loop.timing = True
+            self.loops.append(loop)
+
+    def injection_parts(self) -> dict[str, float] | None:
+        """µs per substep spent reading PyBullet, in the force law and applying the forces,
+        summed over the loops timed since the warm-up (None without the compiled loop)."""
+        if not self.loops:
+            return None
+        parts = [loop.timings for loop in self.loops]
+        n = sum(t["substeps"] for t in parts)
+        if n == 0:
+            return None
+        return {key: round(1e6 * sum(t[f"{key}_s"] for t in parts) / n, 2)
+                for key in ("read", "force_law", "apply")}
 
     def on_reset(self, env: gym.Env, obs: np.ndarray, info: dict) -> None:
         self.unwrap()
@@ -283,6 +322,7 @@ class _BreakdownRecorder:
         self.instrument(base, "_observe", "observation_reward")
         self.instrument(base, "_info", "observation_reward")
         self.instrument(base.path, "project", "observation_reward")
+        self._injector = injector
         self._seen, self.steps = 0, 0
 
     def on_step(self, env: gym.Env, action: np.ndarray, obs: np.ndarray, reward: float,
@@ -291,6 +331,10 @@ class _BreakdownRecorder:
         if self._seen == self.warmup_steps:
             for key in self.timers.seconds:
                 self.timers.seconds[key] = 0.0
+            for loop in self.loops:
+                loop.timing = False
+            self.loops = []
+            self.time_loop_parts(self._injector)
             self._t0 = time.perf_counter()
         elif self._seen > self.warmup_steps:
             self.steps += 1
@@ -299,6 +343,14 @@ class _BreakdownRecorder:
 
 def step_breakdown(env: gym.Env, steps: int) -> dict[str, float]:
     """Microseconds per control step by component (module docstring), one rollout."""
+    return step_breakdown_and_parts(env, steps)[0]
+
+
+def step_breakdown_and_parts(env: gym.Env, steps: int
+                             ) -> tuple[dict[str, float], dict[str, float] | None]:
+    """:func:`step_breakdown`, and the force injection's parts per substep from the same
+    rollout (``injection_parts_us_per_substep`` in the module docstring; None without the
+    compiled wheel loop)."""
     timers = _Timers()
     recorder = _BreakdownRecorder(timers)
     step_simulation = p.stepSimulation
@@ -315,7 +367,7 @@ def step_breakdown(env: gym.Env, steps: int) -> dict[str, float]:
     # counters are zeroed when the timed window opens after the warm-up
     sec["total"] = recorder.elapsed_s
     sec["rest"] = sec["total"] - sum(v for k, v in sec.items() if k not in ("rest", "total"))
-    return {k: round(1e6 * sec[k] / n, 1) for k in BREAKDOWN_KEYS}
+    return {k: round(1e6 * sec[k] / n, 1) for k in BREAKDOWN_KEYS}, recorder.injection_parts()
 
 
 # -- vectorised throughput ------------------------------------------------------------------------
@@ -478,6 +530,15 @@ def format_bench(result: dict) -> str:
         lines += ["", head2, "-" * len(head2)]
         for env_id, b in rows:
             lines.append(f"{env_id:<32}" + "".join(f" {b[k]:>10.1f}" for k in BREAKDOWN_KEYS))
+    parts = [(env_id, r["injection_parts_us_per_substep"], r.get("native_queries"))
+             for env_id, r in result["envs"].items() if r.get("injection_parts_us_per_substep")]
+    if parts:
+        head3 = (f"{'force injection, us per substep':<32} {'read':>10} {'force law':>10} "
+                 f"{'apply':>10}  PyBullet read through")
+        lines += ["", head3, "-" * len(head3)]
+        for env_id, q, native in parts:
+            lines.append(f"{env_id:<32} {q['read']:>10.2f} {q['force_law']:>10.2f} "
+                         f"{q['apply']:>10.2f}  {'C API' if native else 'Python API'}")
     start = result.get("startup")
     if start:
         slowest = max(start["first_make_s"].items(), key=lambda kv: kv[1])

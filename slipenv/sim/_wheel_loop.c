@@ -25,6 +25,7 @@
 #include <Python.h>
 #include <math.h>
 #include <string.h>
+#include <time.h>
 
 #include "bullet_native.h"
 
@@ -336,7 +337,22 @@ typedef struct {
     /* native queries through Bullet's C API (bullet_native.h) */
     BulletApi api;
     int bound, native, verify, mismatch, contact_status, state_status;
+    /* optional timing of the substep's parts (slipenv bench): seconds, substeps */
+    int timing;
+    double t_read, t_law, t_apply;
+    long timed_substeps;
 } WheelLoop;
+
+static double now_s(void)
+{
+#ifndef _WIN32
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+#else
+    return 0.0; /* no part timing on Windows: the parts read as zero */
+#endif
+}
 
 static int inputs_alloc(Inputs *in, int n, int n_spin)
 {
@@ -848,9 +864,11 @@ static b3Handle acquire(WheelLoop *self)
 /* One substep: read PyBullet, compute every wheel's forces, apply them. */
 static int loop_step(WheelLoop *self)
 {
+    double t0 = self->timing ? now_s() : 0.0;
     b3Handle sm = acquire(self);
     if (sm == NULL && PyErr_Occurred())
         return -1;
+    double t1 = self->timing ? now_s() : 0.0;
     Inputs *in = &self->in;
     if (in->chassis)
         self->chassis_contact = 1;
@@ -953,7 +971,15 @@ static int loop_step(WheelLoop *self)
         if (r_abs != 0.0)
             queue_force(self, w->link, force[0], force[1], force[2], px, py, pz);
     }
-    return submit_forces(self, sm);
+    double t2 = self->timing ? now_s() : 0.0;
+    int rc = submit_forces(self, sm);
+    if (self->timing) {
+        self->t_read += t1 - t0;
+        self->t_law += t2 - t1;
+        self->t_apply += now_s() - t2;
+        self->timed_substeps += 1;
+    }
+    return rc;
 }
 
 /* bind_native(pybullet_path, clients_offset, n_clients, anchor_offset): read PyBullet through
@@ -1058,6 +1084,31 @@ static int set_native(WheelLoop *self, PyObject *value, void *closure)
     return 0;
 }
 
+static PyObject *get_timing(WheelLoop *self, void *closure)
+{
+    return PyBool_FromLong(self->timing);
+}
+
+/* Setting `timing` to True starts from zero; to False keeps the times for reading. */
+static int set_timing(WheelLoop *self, PyObject *value, void *closure)
+{
+    int v = value ? PyObject_IsTrue(value) : 0;
+    if (v < 0)
+        return -1;
+    self->timing = v;
+    if (v) {
+        self->t_read = self->t_law = self->t_apply = 0.0;
+        self->timed_substeps = 0;
+    }
+    return 0;
+}
+
+static PyObject *get_timings(WheelLoop *self, void *closure)
+{
+    return Py_BuildValue("{s:d,s:d,s:d,s:l}", "read_s", self->t_read, "force_law_s", self->t_law,
+                         "apply_s", self->t_apply, "substeps", self->timed_substeps);
+}
+
 static PyObject *get_native_verified(WheelLoop *self, void *closure)
 {
     return PyBool_FromLong(self->native && !self->verify);
@@ -1083,6 +1134,11 @@ static PyGetSetDef loop_getset[] = {
      "a body other than a wheel touched the ground", NULL},
     {"native", (getter)get_native, (setter)set_native,
      "PyBullet is read through Bullet's C API (bind_native), not its Python API", NULL},
+    {"timing", (getter)get_timing, (setter)set_timing,
+     "time the parts of each substep (see `timings`); setting it True zeroes them", NULL},
+    {"timings", (getter)get_timings, NULL,
+     "seconds spent reading PyBullet (read_s), in the force law and dampers (force_law_s) and "
+     "applying the forces (apply_s) over `substeps` timed substeps", NULL},
     {"native_verified", (getter)get_native_verified, NULL,
      "the native readings matched the Python API's bit for bit on a substep with contact", NULL},
     {"native_mismatch", (getter)get_native_mismatch, NULL,

@@ -31,6 +31,19 @@ def test_breakdown_components_are_non_negative_and_add_up_to_the_total(husky_res
     assert b["sensors"] > 0.0 and b["estimator"] > 0.0 and b["observation_reward"] > 0.0
 
 
+def test_injection_parts_per_substep_come_from_the_compiled_loop(husky_result):
+    r = husky_result["envs"][ENV]
+    parts = r["injection_parts_us_per_substep"]
+    if parts is None:
+        pytest.skip("the compiled wheel loop is not built (pip install -e .)")
+    assert set(parts) == {"read", "force_law", "apply"}
+    assert all(v > 0.0 for v in parts.values())
+    # the parts are inside the injection the step breakdown timed (per control step)
+    total = sum(parts.values()) * r["substeps_per_step"]
+    assert total < r["breakdown_us_per_step"]["force_injection"]
+    assert "force injection, us per substep" in bench.format_bench(husky_result)
+
+
 def test_coulomb_reference_is_reported_next_to_the_env_rate(husky_result):
     r = husky_result["envs"][ENV]
     assert r["coulomb_env_steps_per_s"] > 0.0
@@ -51,9 +64,15 @@ def test_coulomb_reference_restores_the_worlds_friction_and_the_timers_are_remov
         assert bench.coulomb_steps_per_s(client, 3, base.substeps_per_step) > 0.0
         after = [p.getDynamicsInfo(b, link, physicsClientId=client)[1] for b, link in links]
         assert after == before
+        compiled_apply = vars(base._sim.injector).get("apply")  # the compiled loop's, if built
         bench.step_breakdown(env, 3)
         assert p.stepSimulation.__name__ == "stepSimulation"
         assert "update" not in vars(base.estimator) and "_observe" not in vars(base)
+        # the injector built by the rollout's last reset keeps its own (compiled) apply
+        injector = base._sim.injector
+        if compiled_apply is not None:
+            assert vars(injector)["apply"] == injector._loop.apply
+            assert not injector._loop.timing
     finally:
         env.close()
 
