@@ -547,10 +547,10 @@ def format_bench(result: dict) -> str:
         lines += ["", f"startup: import slipenv {start['import_s']:.2f} s; first make + reset + "
                   f"step {min(start['first_make_s'].values()):.2f}-{slowest[1]:.2f} s "
                   f"(slowest {slowest[0]}); {kernels}"]
-        native = [k for k, v in start.get("native_queries", {}).items() if v]
-        lines.append(f"PyBullet read through Bullet's C API in {len(native)}/"
-                     f"{len(start.get('native_queries', {}))} envs (the others through "
-                     "pybullet's Python functions)")
+        native = start.get("native_queries")
+        if native:
+            lines[-1] += (f"; PyBullet read through Bullet's C API in "
+                          f"{sum(map(bool, native.values()))}/{len(native)} envs")
     caught = result.get("warnings", {})
     if caught.get("count"):
         first = next(iter(caught["messages"]))
