@@ -7,6 +7,9 @@ on clean logs, parameters within 3 reported standard errors of the truth (a sens
 set value; for the other effects, whose effective value the vehicle's own dynamics shift a
 little, the value fitted on a long noise-free calibration run of the same world), the median
 relative error against the value set in the physics where there is one, and timings.
+A log whose hidden effect's physics shows as another effect on that vehicle kind
+(``Effect.confounds``: torque slip on a skid-steer is turning slip) and is named so is a
+miss, counted in the ``confounded`` column.
 
 ``--vehicles`` generates ``--n`` logs on each listed generator vehicle (``synth.VEHICLES``:
 ``diff_drive`` farm robot, ``skid_steer`` four-wheel skid-steer, ``tracked`` Patako's tracked
@@ -32,6 +35,12 @@ mean diagnosis time.
         --vehicles diff_drive,skid_steer,tracked,rover4ws
     python benchmarks/diagnose_hit_rate.py --n 0 --kinematic 30 --duration 120
     python benchmarks/diagnose_hit_rate.py --n 0 --kinds 5 --lengths 60,120,300
+    python benchmarks/diagnose_hit_rate.py --n 0 --soil 10
+
+``--soil N`` diagnoses N kinematic logs (seeds 3 … N + 2; seed 3 is the tests' log) of an
+8 m field swept lane by lane for 3 minutes over two rectangles of softer soil (those of
+``tests/diagnose/test_kinds_and_soil_map.py``) and prints what each is named, with the soil
+map's held-out error ratio and p on the short segments and its gain on the long route.
 """
 
 from __future__ import annotations
@@ -43,6 +52,7 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
+from slipenv.diagnose.effects import EFFECTS
 from slipenv.diagnose.synth import GENERATED
 from slipenv.diagnose.synth import KINDS as HIDDEN_ON
 
@@ -74,17 +84,19 @@ def run_one(job: tuple) -> dict:
              if k in rep}
         rel = {k: abs(rep[k][0] / v - 1.0) for k, v in synth.world.items()
                if k in rep and isinstance(v, float) and v != 0 and not k.startswith("patch_c")}
+    conf = None if effect == "none" else EFFECTS[effect].confound(synth.log.meta.kind)
     return {"seed": seed, "effect": effect, "kind": synth.log.meta.kind,
             "vehicle": vehicle or synth.log.meta.kind, "cause": sel.cause,
+            "confounded": conf is not None and sel.cause == conf.shows_as,
             "also": sel.also, "z": z, "rel": rel, "gen_s": t1 - t0, "diag_s": t2 - t1,
             "columns": [c for c in synth.log.columns if not c.startswith(("enc_", "gt_"))]}
 
 
 def table(results: list[dict]) -> str:
     """The hit-rate table (markdown)."""
-    rows = ["| effect | logs | named right | hit rate | false alarms | params within 3 SE "
-            "| median rel. error vs set value | diagnosis time (mean) |",
-            "|---|---|---|---|---|---|---|---|"]
+    rows = ["| effect | logs | named right | hit rate | confounded | false alarms "
+            "| params within 3 SE | median rel. error vs set value | diagnosis time (mean) |",
+            "|---|---|---|---|---|---|---|---|---|"]
     for effect in GENERATED:
         rs = [r for r in results if r["effect"] == effect]
         if not rs:
@@ -94,8 +106,9 @@ def table(results: list[dict]) -> str:
         zs = [r for r in rs if r["z"]]
         within = sum(all(abs(v) <= Z_LIMIT for v in r["z"].values()) for r in zs)
         rels = [v for r in rs for v in r["rel"].values()]
+        conf = sum(r["confounded"] for r in rs)
         rows.append(f"| {effect} | {len(rs)} | {hits} | {100 * hits / len(rs):.0f} % | "
-                    f"{'-' if fa is None else fa} | "
+                    f"{conf or '-'} | {'-' if fa is None else fa} | "
                     f"{f'{within}/{len(zs)}' if zs else '-'} | "
                     f"{f'{100 * np.median(rels):.1f} %' if rels else '-'} | "
                     f"{np.mean([r['diag_s'] for r in rs]):.1f} s |")
@@ -103,7 +116,7 @@ def table(results: list[dict]) -> str:
     clean = [r for r in results if r["effect"] == "none"]
     alarms = sum(r["cause"] != "none" for r in clean)
     rows.append(f"| **all** | {len(results)} | {hits} | {100 * hits / len(results):.0f} % | "
-                f"{alarms}/{len(clean)} | | | "
+                f"{sum(r['confounded'] for r in results) or '-'} | {alarms}/{len(clean)} | | | "
                 f"{np.mean([r['diag_s'] for r in results]):.1f} s |")
     return "\n".join(rows)
 
@@ -124,7 +137,9 @@ def vehicle_table(results: list[dict], vehicles: list[str]) -> str:
                 alarms = sum(r["cause"] != "none" for r in rs)
                 cells.append(f"{len(rs) - alarms}/{len(rs)} ({alarms} false alarms)")
             else:
-                cells.append(f"{sum(r['cause'] == effect for r in rs)}/{len(rs)}")
+                conf = [r["cause"] for r in rs if r["confounded"]]
+                cells.append(f"{sum(r['cause'] == effect for r in rs)}/{len(rs)}"
+                             + (f" ({len(conf)} named {conf[0]}: confounded)" if conf else ""))
         rows.append(f"| {effect} | {' | '.join(cells)} |")
     cells = []
     for v in vehicles:
@@ -227,6 +242,40 @@ def kinds_table(n: int, lengths: list[float], jobs: int) -> str:
     return "\n".join(rows)
 
 
+SOIL_REGIONS = ((-4.0, -4.0, -0.5, 0.0, 0.008), (1.0, 0.5, 4.0, 4.0, 0.006))
+
+
+def soil_one(seed: int) -> dict:
+    """Diagnose one field log with two soft rectangles; the cause and the map's scores."""
+    from slipenv.diagnose import replay
+    from slipenv.diagnose.fit import Problem
+    from slipenv.diagnose.kinematic import SoilRegion, kinematic_log
+    from slipenv.diagnose.select import select
+
+    regions = tuple(SoilRegion(*r) for r in SOIL_REGIONS)
+    log = kinematic_log(seed, None, duration_s=180.0, route="field", soil_regions=regions)
+    seg = replay.build_segments([log])
+    sel = select(Problem.from_segments(seg), logs=[log])
+    m = next(c for c in sel.candidates if c.name == "soil_map")
+    return {"seed": seed, "cause": sel.cause, "also": sel.also, "ratio": m.error_ratio,
+            "p": m.p_value, "long_gain": None if m.long is None else m.long.gain_relative}
+
+
+def soil_table(n: int, jobs: int) -> str:
+    """What the field logs are named (markdown)."""
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        results = list(pool.map(soil_one, range(3, 3 + n)))
+    rows = ["| seed | named | soil_map held-out error ratio | p (short) | gain (long) |",
+            "|---|---|---|---|---|"]
+    for r in results:
+        long = "-" if r["long_gain"] is None else f"{r['long_gain']:+.2f}"
+        rows.append(f"| {r['seed']} | {'+'.join([r['cause'], *r['also']])} | "
+                    f"{r['ratio']:.3f} | {r['p']:.2g} | {long} |")
+    named = sum(r["cause"] == "soil_map" or "soil_map" in r["also"] for r in results)
+    rows.append(f"| **soil_map named** | {named}/{len(results)} | | | |")
+    return "\n".join(rows)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -245,12 +294,16 @@ def main(argv: list[str] | None = None) -> int:
                         help="seeds per case of the kinematic generator (default 0: skip)")
     parser.add_argument("--kinds", type=int, default=0,
                         help="seeds per vehicle kind, case and length (default 0: skip)")
+    parser.add_argument("--soil", type=int, default=0,
+                        help="field logs with two soil regions (default 0: skip)")
     parser.add_argument("--lengths", default="60,120,300",
                         help="comma-separated log lengths [s] of --kinds")
     args = parser.parse_args(argv)
     if args.kinds > 0:
         lengths = [float(v) for v in args.lengths.split(",")]
         print(kinds_table(args.kinds, lengths, args.jobs), flush=True)
+    if args.soil > 0:
+        print(soil_table(args.soil, args.jobs), flush=True)
     if args.kinematic > 0:
         print(kinematic_table(args.kinematic, args.duration, args.jobs), flush=True)
     if args.n <= 0:
@@ -271,7 +324,8 @@ def main(argv: list[str] | None = None) -> int:
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         results = []
         for r in pool.map(run_one, jobs):
-            flag = "ok " if r["cause"] == r["effect"] else "MISS"
+            flag = ("ok " if r["cause"] == r["effect"] else
+                    "CONF" if r["confounded"] else "MISS")
             zs = " ".join(f"{k}={v:+.1f}" for k, v in r["z"].items())
             print(f"{flag} seed {r['seed']} {r['vehicle']:10s} {r['effect']:15s} -> {r['cause']}"
                   f"{'+' + '+'.join(r['also']) if r['also'] else ''}  [{r['diag_s']:.1f} s]"

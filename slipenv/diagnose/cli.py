@@ -108,6 +108,8 @@ def summary(report: dict, seconds: float | None = None) -> str:
     lines = [f"cause: {report['cause']}"
              + (f" (also: {', '.join(report['also'])})" if report["also"] else "")]
     lines += [f"  {k} = {estimate(v[0], v[1])}" for k, v in report["parameters"].items()]
+    lines += [f"confounded with {c['alternative']}: {c['why']}"
+              for c in report.get("confounded", [])]
     lines.append(f"held-out {g['metric']}: {num(g['before'])} -> {num(g['after'])} "
                  f"({better(g['relative'])})")
     cal = report.get("calibration")

@@ -111,6 +111,22 @@ def consistency(sel: Selection, problem: Problem) -> dict[str, Any]:
     return out
 
 
+def confounded(sel: Selection, kind: str) -> list[dict[str, str]]:
+    """Effects whose physics shows as a named cause on this vehicle kind (``Effect.confounds``,
+    measured on the generator's worlds) and that explain the log on their own (significant):
+    the confounded alternative of that cause, with what was measured."""
+    chosen = {sel.cause, *sel.also} - {"none"}
+    out = []
+    for c in sel.candidates:
+        name = c.effects[0] if len(c.effects) == 1 else None
+        if name is None or name in chosen or c.untestable or not c.significant:
+            continue
+        conf = effect(name).confound(kind)
+        if conf is not None and conf.shows_as in chosen:
+            out.append({"cause": conf.shows_as, "alternative": name, "why": conf.why})
+    return out
+
+
 def build_report(sel: Selection, problem: Problem, logs: list[Log], where: str) -> dict:
     """The JSON report of ``log-format.md`` plus extra keys (effects, thresholds, checks)."""
     seg = problem.seg
@@ -157,6 +173,8 @@ def build_report(sel: Selection, problem: Problem, logs: list[Log], where: str) 
         cal["config_determined"] = False
     return {
         "format": FORMAT, "log": where, "cause": sel.cause, "also": sel.also,
+        "confounded": [{**c, "determined": per_effect.get(c["cause"], {})}
+                       for c in confounded(sel, seg.kind)],
         "parameters": params,
         "determined": determined_map(params),
         "gain": gain, "candidates": candidates,
@@ -288,6 +306,12 @@ def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
         lines += ["| parameter | value ± standard error |", "|---|---|"]
         lines += [f"| `{k}` | {estimate(v[0], v[1])} |" for k, v in report["parameters"].items()]
         lines += [""]
+        for c in report.get("confounded", []):
+            what = ", ".join(f"`{k}` = {estimate(v[0], v[1])}"
+                             for k, v in c.get("determined", {}).items())
+            lines += [f"**Confounded**: `{c['alternative']}` explains the log too; "
+                      f"{c['why']}. What the log determines is {c['cause']}'s "
+                      f"{what or 'parameters'}.", ""]
         undetermined = [k for k, ok in report.get("determined", {}).items() if not ok]
         if undetermined:
             lines += [f"**Not determined** by this log: {', '.join(undetermined)} (standard "

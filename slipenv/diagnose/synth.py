@@ -11,14 +11,19 @@ vehicle kinds, what changes in the world, which columns the log needs — is in 
 
 Why some effects are hidden on one kind only: on a skid-steer vehicle a softer longitudinal
 law shows mainly in turns (the scrub torque dominates and the slip follows the combined law),
-so torque slip and soil patches are hidden on the differential-drive vehicle; a
+so soil patches are hidden on the differential-drive vehicle; torque slip is hidden on every
+kind, but on a skid-steer vehicle it is the world ``turning_slip`` hides and is named so (its
+``Confound``; the benchmark counts it apart), and the rover stands on a slope so that it
+has a drive torque to slip with (``effects/torque_slip.py``); a
 differential-drive vehicle with castors on a soft side slope yaws downhill (the castors carry
 no side force), which is not Yamauchi's side slip, so slopes with side slip are skid-steer
 only. ``combined_slip`` is not generated: on these vehicles a slip angle comes only with side
 slip, so it never appears alone. About 30 % of the differential-drive logs stand on a 5-12°
 slope, except where the effect's ``Hiding`` says otherwise.
 
-The rover (``rover4ws``) carries rolling-radius, track-width and gyro errors. Its steering
+The rover (``rover4ws``) carries rolling-radius, track-width, gyro and torque-slip errors
+(torque slip on a 6-12° slope: on level rigid ground its only drive torque is its wheels
+fighting one another, which a softer law takes away). Its steering
 fixes the turn (each wheel points along its arc about the commanded centre), so a left/right
 radius difference shows mostly as wheels fighting each other (longitudinal slip), less as
 heading drift than on a differential drive. Its PyBullet body's yaw rate chatters between
@@ -159,7 +164,7 @@ def hidden_world(kind: str, name: str, rng: np.random.Generator,
     """
     hiding = effect(name).hiding if name != "none" else None
     slope = 0.0
-    if hiding is not None and hiding.slope_deg is not None:
+    if hiding is not None and hiding.sloped(PHYSICAL_KIND[kind]):
         slope = float(rng.uniform(*hiding.slope_deg))
     elif (PHYSICAL_KIND[kind] == "diff_drive" and (hiding is None or hiding.random_slope)
           and rng.random() < 0.3):
@@ -171,7 +176,7 @@ def hidden_world(kind: str, name: str, rng: np.random.Generator,
         return cfg, {}, world
     spec = make_vehicle(cfg.vehicle)
     ctx = DrawContext(PHYSICAL_KIND[kind], spec, ARENA_M[kind], focus,
-                      lambda: typical_torque_nm(kind))
+                      lambda: typical_torque_nm(kind), slope)
     hidden = hiding.draw(rng, ctx)
     if hidden.slip_options:
         world.update(hidden.slip_options)

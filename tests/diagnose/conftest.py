@@ -29,7 +29,7 @@ CASES = [
     ("none", "diff_drive", 1), ("none", "skid_steer", 2),
     ("rolling_radius", "diff_drive", 3), ("track_width", "diff_drive", 4),
     ("gyro_bias", "skid_steer", 5), ("torque_slip", "diff_drive", 6),
-    ("turning_slip", "skid_steer", 7),
+    ("turning_slip", "skid_steer", 7), ("torque_slip", "rover4ws", 8),
 ]
 
 

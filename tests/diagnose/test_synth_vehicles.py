@@ -21,9 +21,9 @@ def test_effects_are_hidden_on_every_vehicle_of_a_kind_they_apply_to():
         kinds = EFFECTS[name].hiding.kinds
         assert set(synth.KINDS[name]) == {v for v, k in synth.PHYSICAL_KIND.items()
                                           if k in kinds}, name
-    # geometry and the gyro apply to every vehicle; scrub in turns and side slope to
+    # geometry, torque slip and the gyro apply to every vehicle; scrub in turns and side slope to
     # skid-steer vehicles only (tracked included)
-    for name in ("rolling_radius", "track_width", "gyro_bias"):
+    for name in ("rolling_radius", "track_width", "gyro_bias", "torque_slip"):
         assert set(synth.KINDS[name]) == set(synth.VEHICLES), name
     for name in ("turning_slip", "slope_side_slip"):
         assert set(synth.KINDS[name]) == {"skid_steer", "tracked"}, name

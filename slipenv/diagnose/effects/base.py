@@ -161,6 +161,8 @@ class DrawContext:
         Point every other waypoint is near (x, y) [m].
     typical_torque_nm : callable
         ``() -> float``: median |channel torque| of the clean world [N m] (costly, cached).
+    slope_deg : float
+        Slope of the ground the vehicle stands on [deg] (0: level).
     """
 
     kind: str
@@ -168,6 +170,7 @@ class DrawContext:
     arena_m: float
     focus: tuple[float, float]
     typical_torque_nm: Callable[[], float]
+    slope_deg: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -190,7 +193,10 @@ class Hiding:
     draw : callable
         ``draw(rng, ctx: DrawContext) -> Hidden``.
     slope_deg : (float, float) or None
-        The vehicle always stands on a slope drawn in this range [deg].
+        The vehicle always stands on a slope drawn in this range [deg] (on the kinds of
+        ``slope_kinds``).
+    slope_kinds : tuple of str or None
+        Vehicle kinds ``slope_deg`` applies to (None: every kind of ``kinds``).
     random_slope : bool
         A differential-drive vehicle may stand on a random slope (30 % of the logs).
     columns : frozenset of str
@@ -206,11 +212,37 @@ class Hiding:
     kinds: tuple[str, ...]
     draw: Callable[[np.random.Generator, DrawContext], Hidden]
     slope_deg: tuple[float, float] | None = None
+    slope_kinds: tuple[str, ...] | None = None
     random_slope: bool = True
     columns: frozenset[str] = frozenset()
     drop_columns: frozenset[str] = frozenset()
     exact: bool = False
     level_width: bool = False
+
+    def sloped(self, kind: str) -> bool:
+        """True if a vehicle of ``kind`` always stands on a slope of ``slope_deg``."""
+        return self.slope_deg is not None and (self.slope_kinds is None
+                                               or kind in self.slope_kinds)
+
+
+@dataclass(frozen=True)
+class Confound:
+    """A vehicle kind on which the effect's physics shows as another effect of the vocabulary.
+
+    Attributes
+    ----------
+    kind : str
+        Vehicle kind.
+    shows_as : str
+        The effect the log then names (the same change of the world, seen through this
+        kind's kinematics).
+    why : str
+        One sentence for the report: what was measured.
+    """
+
+    kind: str
+    shows_as: str
+    why: str
 
 
 def always(seg: Segments) -> str | None:
@@ -276,6 +308,9 @@ class Effect:
         short trial fits pick the best); None: the bounds' starts.
     hiding : Hiding or None
         How the test generator hides it; None: not generated.
+    confounds : tuple of Confound
+        Vehicle kinds on which its physics shows as another effect (measured; the report
+        names the effect as the confounded alternative when the log names that one).
     mechanism : str or None
         Effects of the same mechanism are never fitted together (one torque-slip law).
     clash_prefix : str
@@ -300,6 +335,7 @@ class Effect:
     channel: str = "pose"
     start: Callable[[StartContext], list] | None = None
     hiding: Hiding | None = None
+    confounds: tuple[Confound, ...] = ()
     mechanism: str | None = None
     clash_prefix: str = ""
     optional: dict[str, float] = field(default_factory=dict)
@@ -314,6 +350,10 @@ class Effect:
                              f"parameters are {list(names)}")
         if self.channel not in ("pose", "gyro"):
             raise ValueError(f"effect {self.name!r}: channel must be 'pose' or 'gyro'")
+
+    def confound(self, kind: str) -> Confound | None:
+        """The :class:`Confound` of vehicle ``kind``, None if its physics shows as itself."""
+        return next((c for c in self.confounds if c.kind == kind), None)
 
     def fields(self) -> tuple[str, ...]:
         """The parameter fields, in the order of the fitted vector."""
