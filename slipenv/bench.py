@@ -293,7 +293,7 @@ class _BreakdownRecorder:
     def time_loop_parts(self, injector) -> None:
         """Have the injector's compiled loop time its substeps' parts (`injection_parts`)."""
         loop = getattr(injector, "_loop", None)
-        if loop is not None and hasattr(loop, "timing"):
+        if loop is not None:
             loop.timing = True
             self.loops.append(loop)
 
@@ -439,13 +439,11 @@ env = gym.make(sys.argv[1])
 env.reset(seed=0)
 env.step(env.action_space.sample() * 0)
 t2 = time.perf_counter()
-native = bool(getattr(env.unwrapped._sim.injector, "native_queries", False))
 env.close()
 from slipenv.estimators.lindgren.ekf import compiled_available
 from slipenv.sim.compiled import wheel_loop_module
 print(json.dumps({"import_s": t1 - t0, "first_make_s": t2 - t1, "compiled": {
-    "wheel_loop": wheel_loop_module() is not None, "lindgren_ekf": compiled_available()},
-    "native_queries": native}))
+    "wheel_loop": wheel_loop_module() is not None, "lindgren_ekf": compiled_available()}}))
 """
 
 
@@ -456,9 +454,7 @@ def startup_cost(env_ids: list[str]) -> dict:
     Returns
     -------
     dict
-        ``{"import_s": median, "first_make_s": {id: s}, "compiled": {kernel: bool},
-        "native_queries": {id: bool}}``: the last says whether the env's injector reads
-        PyBullet through Bullet's C API (`slipenv.sim.bullet_native`).
+        ``{"import_s": median, "first_make_s": {id: s}, "compiled": {kernel: bool}}``.
     """
     runs = {}
     for env_id in env_ids:
@@ -467,8 +463,7 @@ def startup_cost(env_ids: list[str]) -> dict:
         runs[env_id] = json.loads(out.stdout.strip().splitlines()[-1])
     return {"import_s": round(statistics.median(r["import_s"] for r in runs.values()), 3),
             "first_make_s": {k: round(r["first_make_s"], 3) for k, r in runs.items()},
-            "compiled": next(iter(runs.values()))["compiled"] if runs else {},
-            "native_queries": {k: r["native_queries"] for k, r in runs.items()}}
+            "compiled": next(iter(runs.values()))["compiled"] if runs else {}}
 
 
 def run_bench(env_ids: list[str], steps: int = 200, repeats: int = 5,
@@ -547,10 +542,10 @@ def format_bench(result: dict) -> str:
         lines += ["", f"startup: import slipenv {start['import_s']:.2f} s; first make + reset + "
                   f"step {min(start['first_make_s'].values()):.2f}-{slowest[1]:.2f} s "
                   f"(slowest {slowest[0]}); {kernels}"]
-        native = start.get("native_queries")
+        native = [r["native_queries"] for r in result["envs"].values() if "native_queries" in r]
         if native:
             lines[-1] += (f"; PyBullet read through Bullet's C API in "
-                          f"{sum(map(bool, native.values()))}/{len(native)} envs")
+                          f"{sum(native)}/{len(native)} envs")
     caught = result.get("warnings", {})
     if caught.get("count"):
         first = next(iter(caught["messages"]))

@@ -183,6 +183,9 @@ class WheelSoilInjector:
                 raise ValueError(f"{key} must be finite and > 0, got {value!r}")
         if not (math.isfinite(damping_ratio) and damping_ratio >= 0.0):
             raise ValueError(f"damping_ratio must be finite and >= 0, got {damping_ratio!r}")
+        for key, flag in (("compiled", compiled), ("native_queries", native_queries)):
+            if flag is not None and not isinstance(flag, bool):
+                raise ValueError(f"{key} must be True, False or None, got {flag!r}")
         self.client = client
         self.body_id = body.body_id
         self.ground_id = ground_id

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from slipenv.envs.factory import make_force_model, make_soil_map, make_vehicle
@@ -43,3 +44,21 @@ def drive(sim: Simulator, v_mps: float, omega_rad_s: float, seconds: float):
 
     speeds, steer = twist_to_commands(sim.spec, v_mps, omega_rad_s)
     return [sim.step(speeds, steer) for _ in range(int(round(seconds / sim.control_dt_s)))]
+
+
+def turn_and_stop(sim: Simulator) -> np.ndarray:
+    """2 s from the current state: accelerate, turn hard, stop on the spot; per control step
+    the truth and every per-wheel state of the injector (to compare two runs bit for bit)."""
+    from slipenv.vehicles.kinematics import twist_to_commands
+
+    rows = []
+    for i in range(40):
+        v, w = (0.6, 0.0) if i < 15 else ((0.4, 1.2) if i < 30 else (0.0, 0.0))
+        speeds, steer = twist_to_commands(sim.spec, v, w)
+        truth = sim.step(speeds, steer)
+        inj = sim.injector
+        rows.append(np.concatenate([
+            truth.position_m, truth.velocity_body_mps, [truth.yaw_rate_rad_s],
+            inj.s, inj.b, inj.load, inj.fx, inj.fy, inj.res, inj.damper,
+            np.ravel(inj.resistance_force_n)]))
+    return np.array(rows)

@@ -11,6 +11,7 @@ import pytest
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim import bullet_native, compiled
 from slipenv.sim.wheel_soil import WheelSoilInjector
+from tests.sim.conftest import turn_and_stop
 
 p = import_pybullet()
 
@@ -26,23 +27,12 @@ def _drive(sim, native: bool | None = None, bind: tuple | None = None) -> np.nda
     After the reset (which builds the injector): `native` switches the loop's native queries,
     `bind` binds them to another client table (`WheelLoop.bind_native`'s arguments).
     """
-    from slipenv.vehicles.kinematics import twist_to_commands
-
     sim.reset(0.0, 0.0, 0.3)
     if native is not None:
         sim.injector._loop.native = native
     if bind is not None:
         sim.injector._loop.bind_native(*bind)
-    rows = []
-    for i in range(40):
-        v, w = (0.6, 0.0) if i < 15 else ((0.4, 1.2) if i < 30 else (0.0, 0.0))
-        speeds, steer = twist_to_commands(sim.spec, v, w)
-        truth = sim.step(speeds, steer)
-        inj = sim.injector
-        rows.append(np.concatenate([truth.position_m, truth.velocity_body_mps,
-                                    [truth.yaw_rate_rad_s], inj.s, inj.b, inj.load, inj.fx,
-                                    inj.fy, inj.res, np.ravel(inj.resistance_force_n)]))
-    return np.array(rows)
+    return turn_and_stop(sim)
 
 
 def test_elf_symbols_reads_nothing_from_a_file_that_is_not_elf(tmp_path):
@@ -134,3 +124,12 @@ def test_native_queries_required_but_switched_off_is_a_clear_error(make_sim, mon
     injector = WheelSoilInjector(sim.client, sim.spec, sim.body, sim.terrain.body_id,
                                  sim.injector.force_model, sim.injector.soil_map, sim.dt_s)
     assert not injector.native_queries
+
+
+@pytest.mark.parametrize("key, value", [("native_queries", "yes"), ("compiled", 1)])
+def test_switches_that_are_not_booleans_are_a_clear_error(make_sim, key, value):
+    sim = make_sim("husky", "loose_sand", "linear")
+    with pytest.raises(ValueError, match=f"{key} must be True, False or None"):
+        WheelSoilInjector(sim.client, sim.spec, sim.body, sim.terrain.body_id,
+                          sim.injector.force_model, sim.injector.soil_map, sim.dt_s,
+                          **{key: value})

@@ -26,6 +26,7 @@ from slipenv.terramechanics.models import (
     ReinaForceModel,
 )
 from slipenv.terramechanics.presets import SOILS
+from tests.sim.conftest import turn_and_stop
 
 loop = compiled.wheel_loop_module()
 pytestmark = pytest.mark.skipif(
@@ -122,25 +123,13 @@ def test_a_subclass_that_changes_the_law_is_not_compiled():
 
 def _drive(make_sim, monkeypatch, pure: bool, vehicle: str, soil: str, force_model: str,
            **kw) -> tuple[np.ndarray, bool]:
-    from slipenv.vehicles.kinematics import twist_to_commands
-
     if pure:
         monkeypatch.setenv(compiled.PURE_PYTHON_ENV, "1")
     else:
         monkeypatch.delenv(compiled.PURE_PYTHON_ENV, raising=False)
     sim = make_sim(vehicle, soil, force_model, **kw)
     sim.reset(0.0, 0.0, 0.3)
-    rows = []
-    for i in range(40):  # 2 s: accelerate, turn hard, stop on the spot
-        v, w = (0.6, 0.0) if i < 15 else ((0.4, 1.2) if i < 30 else (0.0, 0.0))
-        speeds, steer = twist_to_commands(sim.spec, v, w)
-        truth = sim.step(speeds, steer)
-        inj = sim.injector
-        rows.append(np.concatenate([
-            truth.position_m, truth.velocity_body_mps, [truth.yaw_rate_rad_s],
-            inj.s, inj.b, inj.load, inj.fx, inj.fy, inj.res, inj.damper,
-            np.ravel(inj.resistance_force_n)]))
-    return np.array(rows), sim.injector.is_compiled
+    return turn_and_stop(sim), sim.injector.is_compiled
 
 
 @pytest.mark.parametrize("vehicle, soil, force_model, kw", [
