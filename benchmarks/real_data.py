@@ -149,6 +149,7 @@ def session_models(logs) -> None:
           "nominal → fitted [mm] | cut | determined part applied | cut |\n"
           "|---|---|---|---|---|---|---|---|---|---|---|")
     cuts, cuts_det = [], []
+    by_path: dict[str, list[float]] = defaultdict(list)
     for name, runs in sorted(sessions.items()):
         try:
             rep, _ = diagnose(runs, name)
@@ -173,6 +174,7 @@ def session_models(logs) -> None:
         rel, rel_det = 1.0 - after / before, 1.0 - after_det / before
         cuts.append(rel)
         cuts_det.append(rel_det)
+        by_path[runs[0].meta.data["optiodom"]["path_type"]].append(rel)
         print(f"| {name} | {len(runs)} | {100 * share:.0f} % | {rep['cause']}"
               f"{' (' + ', '.join(rep['also']) + ')' if rep['also'] else ''} | {params} | "
               f"{det} | {len(others)} | {1e3 * before:.0f} → {1e3 * after:.0f} | "
@@ -183,6 +185,13 @@ def session_models(logs) -> None:
               f"{100 * np.mean(cuts):.0f} % on average (min {100 * np.min(cuts):.0f} %, "
               f"{len(cuts)} sessions with a cause); applied as far as determined for arcs: "
               f"{100 * np.mean(cuts_det):.0f} % (min {100 * np.min(cuts_det):.0f} %)")
+        counts = defaultdict(int)
+        for runs in sessions.values():
+            counts[runs[0].meta.data["optiodom"]["path_type"]] += 1
+        for path, rel in sorted(by_path.items()):
+            print(f"  {path} sessions: {len(rel)} of {counts[path]} name a cause; their models "
+                  f"cut it by {100 * np.mean(rel):.0f} % on average (min "
+                  f"{100 * np.min(rel):.0f} %, max {100 * np.max(rel):.0f} %)")
 
 
 def position_rmse(seg, params: dict) -> float:

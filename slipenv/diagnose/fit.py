@@ -137,8 +137,10 @@ def unpack(effects: tuple[str, ...], x) -> dict[str, Term]:
 
 def param_count(effects: tuple[str, ...]) -> int:
     """Number of fitted parameters of ``effects`` (a layout field counts: chosen from the
-    data, it is a degree of freedom of the model)."""
-    return sum(len(effect(name).fields()) for name in effects)
+    data, it is a degree of freedom of the model; a redundant one held is not)."""
+    return sum(len(effect(name).fields())
+               - sum(other in effects for other in effect(name).redundant.values())
+               for name in effects)
 
 
 def layout(effects: tuple[str, ...], seg: Segments) -> list[tuple[str, Bound]]:
@@ -212,11 +214,14 @@ def fit(problem: Problem, effects: tuple[str, ...], index: np.ndarray | None = N
     scale = np.array([b.scale for _, b in specs])
     # layout fields (``Effect.fixed``): set by the start, never moved by the optimiser
     fixed = {f"{name}.{f}" for name in effects for f in effect(name).fixed}
-    free = np.array([n not in fixed for n in names])
+    # a degree of freedom another fitted effect already carries: held at its start
+    held = {f"{name}.{f}" for name in effects
+            for f, other in effect(name).redundant.items() if other in effects}
+    free = np.array([n not in fixed and n not in held for n in names])
 
     def solve(values: dict[str, float], evals: int):
-        full = np.clip([values.get(n, bound[n].start) for n in names], lo + 1e-12 * np.abs(lo),
-                       hi - 1e-12 * np.abs(hi))
+        full = np.clip([bound[n].start if n in held else values.get(n, bound[n].start)
+                        for n in names], lo + 1e-12 * np.abs(lo), hi - 1e-12 * np.abs(hi))
 
         def fun(xf: np.ndarray) -> np.ndarray:
             x = full.copy()

@@ -4,17 +4,18 @@ The segment comparison of ``select.py`` re-anchors every few seconds on the grou
 slow drift (a 1 % track-width error turning a circle leaves 0.2° per 3 s segment) hides in the
 noise of each segment, and its gain looks immaterial over a few seconds. Here:
 
-- **Blocks.** A single log is cut into ``N_BLOCKS`` contiguous blocks in time (several logs:
-  every log is a block, folds as in ``select.make_folds``). For every fold the effects are
-  fitted on the other folds' blocks, each replayed whole (a slow drift is estimated from the
-  horizon it shows on), and the held-out blocks are replayed at horizons of several lengths:
-  the segment length, doubled until it reaches the block, and the whole block (from the
-  logged pose at its start only).
-- **Halves.** A single log is also cut in two: fit on one half replayed whole, replay the
-  other half whole. The gain and the material drift are read there, on the longest horizon a
-  single log offers: 1 - E/E⁰ of the held-out mean squared errors, RMS fall × √3 / distance
-  covered as in ``select.py``, and for the heading also per angle turned (a 1 % track-width
-  error is a 1 % error of every turn, whatever the distance between turns).
+- **Blocks.** A single log is cut into ``N_BLOCKS`` contiguous blocks in time (two logs:
+  each into half as many; three or more: every log is a block, folds as in
+  ``select.make_folds``). For every fold the effects are fitted on the other folds' blocks,
+  each replayed whole (a slow drift is estimated from the horizon it shows on), and the
+  held-out blocks are replayed at horizons of several lengths: the segment length, doubled
+  until it reaches the block, and the whole block (from the logged pose at its start only).
+- **Halves.** A single log is also cut in two (two logs: one per log): fit on one half
+  replayed whole, replay the other half whole. The gain and the material drift are read
+  there, on the longest horizon a single log offers: 1 - E/E⁰ of the held-out mean squared
+  errors, RMS fall × √3 / distance covered as in ``select.py``, and for the heading also per
+  angle turned (a 1 % track-width error is a 1 % error of every turn, whatever the distance
+  between turns).
 - **p.** Errors along one run are correlated (a replay's error integrates the noise), so
   samples of one replay are not independent evidence. Two held-out score tests, each
   asking whether the reference's residual r points along the correction c = r - r' the
@@ -116,15 +117,20 @@ def _spans(t: np.ndarray, ok: np.ndarray, a: int, b: int, length_s: float | None
 
 def blocks(arrays: list[dict], n_folds: int, n_blocks: int = N_BLOCKS
            ) -> list[tuple[int, int, int, int]]:
-    """``(fold, log, start, stop)`` of the held-out blocks: ``n_blocks`` in time of a single
-    log, else one per log with fold = log index mod ``n_folds``."""
+    """``(fold, log, start, stop)`` of the held-out blocks: one per log with fold = log index
+    mod ``n_folds`` when there are at least ``MIN_BLOCKS`` logs; fewer logs (one run, or a
+    clockwise and a counter-clockwise run) are each cut into ⌈``n_blocks`` / logs⌉ blocks in
+    time, every block its own fold."""
     n_logs = len(arrays)
-    if n_logs >= 2:
+    if n_logs >= MIN_BLOCKS:
         k = min(n_folds, n_logs)
         return [(li % k, li, 0, len(arr["t"])) for li, arr in enumerate(arrays)]
-    n = len(arrays[0]["t"])
-    edges = np.linspace(0, n, n_blocks + 1).round().astype(int)
-    return [(k, 0, int(edges[k]), int(edges[k + 1])) for k in range(n_blocks)]
+    per = -(-n_blocks // n_logs)
+    out = []
+    for li, arr in enumerate(arrays):
+        edges = np.linspace(0, len(arr["t"]), per + 1).round().astype(int)
+        out += [(li * per + k, li, int(edges[k]), int(edges[k + 1])) for k in range(per)]
+    return out
 
 
 def build(problem: Problem, arrays: list[dict], logs: list, n_folds: int,
@@ -163,8 +169,9 @@ def build(problem: Problem, arrays: list[dict], logs: list, n_folds: int,
 
 
 def held_out(problem: Problem, hz: Horizons, effects: tuple[str, ...],
-             channel: str) -> Replays:
-    """Held-out replays of the blocks by ``effects``, fitted on each fold's training part."""
+             channel: str, starts: list[dict] | None = None) -> Replays:
+    """Held-out replays of the blocks by ``effects``, fitted on each fold's training part
+    (``starts``: per fold, fitted values to start from)."""
     folds = hz.folds
     res = [np.zeros(seg.gt.shape[:2] + ((1,) if channel == "gyro" else (3,)))
            for seg in hz.seg]
@@ -177,7 +184,7 @@ def held_out(problem: Problem, hz: Horizons, effects: tuple[str, ...],
             # from the horizon it shows on, not from re-anchored pieces of it
             whole, others = hz.seg[-1], np.flatnonzero(hz.fold[-1] != f)
             train = Problem(whole.take(others), problem.heading_scale_m, problem.travel_m)
-            model = fit(train, effects).params
+            model = fit(train, effects, start=starts[i] if starts else None).params
         models.append(model)
         for h, (seg, fold) in enumerate(zip(hz.seg, hz.fold, strict=True)):
             idx = np.flatnonzero(fold == f)

@@ -31,8 +31,10 @@ candidate with fewer parameters that is not significantly worse (and within ``TI
 the best) is preferred: parsimony, so that a track-width change is not
 called turning slip. Further effects are added one at a time ("also", forward selection over
 every testable effect that helps alone on either route) while the joint model passes the same
-three tests against the current one; the joint model is then fitted on all segments, its
-parameters reported with their joint covariance.
+three tests against the current one, except that a calibration effect (wheel radii, track
+width: ``Effect.calibration``) need not be material on its own once a cause is named; the
+joint model is then fitted on all segments, its parameters reported with their joint
+covariance.
 """
 
 from __future__ import annotations
@@ -117,18 +119,21 @@ def make_folds(seg: Segments) -> np.ndarray:
 
 
 def cross_validate(problem: Problem, effects: tuple[str, ...], folds: np.ndarray,
-                   channel: str | None = None) -> Candidate:
-    """Held-out errors and predictions of ``effects`` (refitted with each fold left out)."""
+                   channel: str | None = None, starts: list[dict] | None = None) -> Candidate:
+    """Held-out errors and predictions of ``effects`` (refitted with each fold left out;
+    ``starts``: per fold, fitted values to start from, e.g. the named cause's when an effect
+    is added to it)."""
     seg = problem.seg
     chan = channel or problem.channel(effects)
     cand = Candidate(effects, chan, param_count(effects))
     errors = np.zeros(len(seg))
     pred = np.zeros(seg.gt.shape if chan == "pose" else seg.gt.shape[:2])
-    for k in np.unique(folds):
+    for i, k in enumerate(np.unique(folds)):
         test = np.flatnonzero(folds == k)
         p: replay.Model = {}
         if effects:
-            f = fit(problem, effects, np.flatnonzero(folds != k))
+            f = fit(problem, effects, np.flatnonzero(folds != k),
+                    start=starts[i] if starts else None)
             cand.fold_fits.append(f)
             p = f.params
         part = seg.take(test)
@@ -165,7 +170,8 @@ def compare(reference: np.ndarray, errors: np.ndarray) -> tuple[float, float]:
     return gain, (1 + hits) / 20001
 
 
-def _judge(problem: Problem, cand: Candidate, reference: np.ndarray) -> None:
+def _judge(problem: Problem, cand: Candidate, reference: np.ndarray,
+           increment: bool = False) -> None:
     cand.gain_relative, cand.p_value = compare(reference, cand.errors)
     cand.error_ratio = float(cand.errors.sum()) / max(float(reference.sum()), 1e-300)
     fall = np.sqrt(3.0) * (np.sqrt(reference.mean()) - np.sqrt(cand.errors.mean()))
@@ -178,28 +184,37 @@ def _judge(problem: Problem, cand: Candidate, reference: np.ndarray) -> None:
         cand.drift = fall / problem.travel_m
         cand.material = cand.drift >= MIN_DRIFT
     cand.short_significant = (cand.p_value < ALPHA and cand.gain_relative >= MIN_GAIN
-                              and cand.material)
+                              and (cand.material or increment))
     cand.significant = cand.short_significant or cand.long_significant
 
 
 def _judge_long(problem: Problem, hz: tuple | None, cand: Candidate,
-                reference: tuple[horizon.Replays, horizon.Replays | None] | None) -> None:
+                reference: tuple[horizon.Replays, horizon.Replays | None] | None,
+                increment: bool = False, warm: Candidate | None = None) -> None:
     """The long-horizon route (``horizon.py``): the same three tests on the held-out blocks
     replayed at horizons up to the whole block (``hz``: the blocks, and the two halves of a
-    single log for the gain and drift; ``reference``: their replays by the reference)."""
+    single log for the gain and drift; ``reference``: their replays by the reference).
+    ``increment``: materiality not required (``cand`` adds a calibration effect to a named
+    cause); ``warm``: the named cause ``cand`` extends (its fits start from ``warm``'s).
+    The candidate's held-out replays do not depend on the reference: judged again (an added
+    cause, then against the nominal model), it reuses them."""
     if hz is None or reference is None:
         return
     blocks, halves = hz
-    replays = horizon.held_out(problem, blocks, cand.effects, cand.channel)
-    half = (None if halves is None else
-            (horizon.held_out(problem, halves, cand.effects, cand.channel), reference[1],
-             halves))
+    if cand.long is None:
+        replays = horizon.held_out(problem, blocks, cand.effects, cand.channel,
+                                   None if warm is None else warm.long.replays.models)
+        cand.long_half = (None if halves is None else
+                          horizon.held_out(problem, halves, cand.effects, cand.channel,
+                                           None if warm is None else warm.long_half.models))
+    else:
+        replays = cand.long.replays
+    half = None if halves is None else (cand.long_half, reference[1], halves)
     cand.long = horizon.judge(problem, blocks, replays, reference[0], cand.channel, half)
-    cand.long_half = None if half is None else half[0]
     material = MIN_GYRO_DRIFT_RAD_S if cand.channel == "gyro" else MIN_DRIFT
     drift = max(cand.long.drift, cand.long.turn_drift)
     cand.long_significant = (cand.long.p_value < ALPHA and cand.long.gain_relative >= MIN_GAIN
-                             and drift >= material)
+                             and (drift >= material or increment))
     cand.significant = cand.short_significant or cand.long_significant
 
 
@@ -266,8 +281,8 @@ def select(problem: Problem, progress: bool = False, logs: list | None = None) -
     if logs:
         arrays = [log_arrays(log) for log in logs]
         blocks = horizon.build(problem, arrays, logs, N_FOLDS)
-        halves = (horizon.build(problem, arrays, logs, N_FOLDS, 2, 2) if len(logs) == 1
-                  else None)
+        halves = (horizon.build(problem, arrays, logs, N_FOLDS, 2, 2)
+                  if len(logs) < horizon.MIN_BLOCKS else None)
         hz = None if blocks is None else (blocks, halves)
     long_base = ({ch: (horizon.held_out(problem, hz[0], (), ch),
                        None if hz[1] is None else horizon.held_out(problem, hz[1], (), ch))
@@ -298,11 +313,14 @@ def select(problem: Problem, progress: bool = False, logs: list | None = None) -
         while rest:
             trials = []
             for name in rest:
-                joint = cross_validate(problem, (*current.effects, name), folds)
-                _judge(problem, joint, current.errors)
+                joint = cross_validate(problem, (*current.effects, name), folds,
+                                       starts=[f.params for f in current.fold_fits])
+                calibration = effect(name).calibration
+                _judge(problem, joint, current.errors, increment=calibration)
                 if not joint.short_significant:  # the long route only where needed (cost)
                     _judge_long(problem, hz, joint, None if current.long is None
-                                else (current.long.replays, current.long_half))
+                                else (current.long.replays, current.long_half),
+                                increment=calibration, warm=current)
                 if joint.significant:
                     trials.append(joint)
             if not trials:

@@ -110,3 +110,22 @@ def test_unregister_removes_the_effect():
     register(TOY)
     unregister(TOY.name)
     assert "odometer_scale" not in EFFECTS and effect_ids() == VOCABULARY
+
+
+def test_combined_slip_at_zero_slip_angle_is_a_common_wheel_radius_so_it_is_held_beside_one():
+    from slipenv.diagnose.effects.combined_slip import CombinedSlip
+    from slipenv.diagnose.effects.rolling_radius import RollingRadius
+    from slipenv.diagnose.fit import param_count
+    from slipenv.diagnose.kinematic import kinematic_log as kin_log
+    from slipenv.diagnose.replay import simulate
+
+    seg = build_segments([kin_log(5, None, duration_s=60.0)])
+    s = 0.01  # |g| = |d| (1 - s) on every wheel, forward or back: the radii times 1 - s
+    slip = simulate(seg, {"combined_slip": CombinedSlip(s, 0.0, 0.02)})
+    r0 = float(seg.radius[0, 0])
+    radii = simulate(seg, {"rolling_radius": RollingRadius(r0 * (1 - s), r0 * (1 - s))})
+    assert np.allclose(slip, radii, atol=1e-12)
+    assert param_count(("rolling_radius", "combined_slip")) == 4  # s_x0 is not a fifth
+    f = fit(Problem.from_segments(seg), ("rolling_radius", "combined_slip"))
+    assert f.params["combined_slip"].s_x0 == 0.0
+    assert effect("combined_slip").redundant == {"s_x0": "rolling_radius"}

@@ -102,3 +102,77 @@ def test_single_real_optiodom_drifting_run_gets_a_geometric_cause(name):
     report, _ = _diagnose(load_optiodom_run(run))
     assert {"rolling_radius", "track_width"} & set(_named(report)), report["candidates"]
     assert report["calibration"]["wheel_separation_m"][0] == pytest.approx(0.2025, abs=0.002)
+
+
+def test_two_logs_are_cut_into_blocks_in_time_each_its_own_fold():
+    arrays = [{"t": np.arange(100.0)}, {"t": np.arange(80.0)}]
+    parts = horizon.blocks(arrays, n_folds=6)
+    assert len(parts) == horizon.N_BLOCKS
+    assert len({fold for fold, *_ in parts}) == horizon.N_BLOCKS
+    for li, arr in enumerate(arrays):  # each log tiled exactly, in time order
+        mine = [(a, b) for _, log, a, b in parts if log == li]
+        assert mine[0][0] == 0 and mine[-1][1] == len(arr["t"])
+        assert all(b == a2 for (_, b), (a2, _) in zip(mine, mine[1:], strict=False))
+    halves = horizon.blocks(arrays, n_folds=6, n_blocks=2)  # one run each: fit on the other
+    assert [(f, log, a, b) for f, log, a, b in halves] == [(0, 0, 0, 100), (1, 1, 0, 80)]
+    three = horizon.blocks(arrays + [{"t": np.arange(50.0)}], n_folds=2)
+    assert [(f, log) for f, log, *_ in three] == [(0, 0), (1, 1), (0, 2)]  # runs are blocks
+
+
+def test_an_added_calibration_needs_significance_and_gain_but_not_materiality_of_its_own():
+    from types import SimpleNamespace
+
+    from slipenv.diagnose.select import MIN_DRIFT, Candidate, _judge
+
+    rng = np.random.default_rng(0)
+    reference = 1e-6 * (1.0 + 0.1 * rng.random(40))
+    problem = SimpleNamespace(travel_m=1.0)
+    cand = Candidate(("track_width", "rolling_radius"), "pose", errors=0.5 * reference)
+    _judge(problem, cand, reference)
+    assert cand.p_value < 0.01 and cand.gain_relative >= 0.2
+    assert cand.drift < MIN_DRIFT and not cand.significant  # too small to be a first cause
+    _judge(problem, cand, reference, increment=True)
+    assert cand.significant  # but it cuts half of what the named cause leaves
+    worse = Candidate(cand.effects, "pose", errors=0.9 * reference)
+    _judge(problem, worse, reference, increment=True)
+    assert not worse.significant  # the gain rule still holds
+    from slipenv.diagnose.effects import EFFECTS, effect
+
+    # only geometric parameters are calibrations; a slip law added must be material too
+    assert {n for n in EFFECTS if effect(n).calibration} == {"rolling_radius", "track_width"}
+
+
+def _optiodom_session(session: str) -> list:
+    from slipenv.logs.optiodom import list_optiodom_runs, load_optiodom_run
+
+    return [load_optiodom_run(r) for r in list_optiodom_runs(OPTIODOM) if session in r.name]
+
+
+@pytest.mark.skipif(not OPTIODOM.is_dir(), reason=f"the real OptiOdom logs are not at {OPTIODOM}")
+def test_real_circle_session_driven_both_ways_names_track_width_and_wheel_radii_together():
+    # three runs each way: -7.6° one way, +9.9° the other, which one parameter cannot make
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        report, _ = diagnose(_optiodom_session("circular_250620202104"), "<session>")
+    assert report["cause"] == "track_width" and report["also"] == ["rolling_radius"]
+    cal = report["calibration"]
+    assert cal["separable"] is True  # both directions separate the ratio from the width
+    # what the second cause adds is the distance scale: both wheels a little under the
+    # nominal 0.042 m (as the straight-line sessions find), equal within their ratio's SE
+    ratio, se = cal["right_left_radius_ratio"]
+    assert abs(ratio - 1.0) <= 3 * se
+    for side in ("left_wheel_radius_m", "right_wheel_radius_m"):
+        assert 0.0415 < cal[side][0] < 0.042
+    assert cal["wheel_separation_m"][0] == pytest.approx(0.2025, abs=1e-3)
+
+
+@pytest.mark.skipif(not OPTIODOM.is_dir(), reason=f"the real OptiOdom logs are not at {OPTIODOM}")
+def test_real_session_of_one_clockwise_and_one_counter_clockwise_run_gets_track_width():
+    runs = _optiodom_session("circular_250620202345")
+    assert len(runs) == 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        report, _ = diagnose(runs, "<session>")
+    assert report["cause"] == "track_width", report["candidates"]
+    value, se = report["parameters"]["track_width_m"]
+    assert value == pytest.approx(0.2025, abs=3 * se + 5e-4)

@@ -322,6 +322,16 @@ class Effect:
         Layout fields (a map's grid and cells' regions): chosen by ``start`` (a model-order
         choice on the data), then held while the other fields are fitted; their standard
         error is 0.
+    calibration : bool
+        A geometric parameter of the odometry (wheel radii, track width). Once a cause is
+        named, such an effect is added when held-out data support it (p and gain) even if
+        its own drift is below the materiality rule: it is the calibration a user applies.
+        Any other added effect must be material as well (a slip law below that size is the
+        unmodelled slip every physics engine and vehicle holds).
+    redundant : dict
+        Fields that are the same degree of freedom as another effect's parameters, by that
+        effect's id: held at their bounds' start when it is fitted too (combined slip's s_x0
+        scales every wheel's travel by 1 - s_x0, as a common wheel radius does).
     """
 
     name: str
@@ -340,6 +350,8 @@ class Effect:
     clash_prefix: str = ""
     optional: dict[str, float] = field(default_factory=dict)
     fixed: tuple[str, ...] = ()
+    calibration: bool = False
+    redundant: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         names = self.fields()

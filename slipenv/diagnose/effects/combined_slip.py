@@ -57,6 +57,7 @@ EFFECT = Effect(
     name="combined_slip",
     meaning="longitudinal slip grows with slip angle (Reina Eq. 12)",
     params=CombinedSlip, bounds=bounds, apply=apply, rank=6, applicable=applicable,
+    redundant={"s_x0": "rolling_radius"},
     contract=(Scalar("s_x0", "s_x0"), Scalar("k_beta", "k_beta"),
               Scalar("beta0_rad", "beta0_rad")),
 )

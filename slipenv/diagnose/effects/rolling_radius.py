@@ -67,6 +67,7 @@ def draw(rng: np.random.Generator, ctx: DrawContext) -> Hidden:
 
 EFFECT = Effect(
     name="rolling_radius",
+    calibration=True,
     meaning="effective rolling radius differs from nominal (per wheel)",
     params=RollingRadius, bounds=bounds, start=start, apply=apply, rank=1,
     contract=(PerSide("left_m", "right_m", "radius_{w}_m"),),

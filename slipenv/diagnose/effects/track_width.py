@@ -68,6 +68,7 @@ def draw(rng: np.random.Generator, ctx: DrawContext) -> Hidden:
 
 EFFECT = Effect(
     name="track_width",
+    calibration=True,
     meaning="effective distance between the contact lines differs from nominal",
     params=TrackWidth, bounds=bounds, start=start, apply=apply, rank=2,
     contract=(Scalar("width_m", "track_width_m"),),
