@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pathlib
+import shutil
 import subprocess
 import sys
 import tomllib
@@ -36,9 +37,16 @@ def test_the_users_folders_map_under_the_one_root():
 
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory) -> pathlib.Path:
+    # Built from a private copy of the source: pip builds in the tree it is given, and two
+    # test workers building the checkout at once race on its build folder.
+    src = tmp_path_factory.mktemp("src") / "slipenv"
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(
+        ".git", "build", "runs", "*.egg-info", "__pycache__", ".pytest_cache", "*.so"))
     out = tmp_path_factory.mktemp("wheel")
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
-                    "-q", "-w", str(out), str(ROOT)], check=True, capture_output=True)
+    done = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps",
+                           "--no-build-isolation", "-q", "-w", str(out), str(src)],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-3000:]
     return next(out.glob("slipenv-*.whl"))
 
 
