@@ -190,12 +190,13 @@ def _judge(problem: Problem, cand: Candidate, reference: np.ndarray,
 
 def _judge_long(problem: Problem, hz: tuple | None, cand: Candidate,
                 reference: tuple[horizon.Replays, horizon.Replays | None] | None,
-                increment: bool = False, warm: Candidate | None = None) -> None:
+                increment: bool = False, warm: tuple[Candidate, ...] = ()) -> None:
     """The long-horizon route (``horizon.py``): the same three tests on the held-out blocks
     replayed at horizons up to the whole block (``hz``: the blocks, and the two halves of a
     single log for the gain and drift; ``reference``: their replays by the reference).
     ``increment``: materiality not required (``cand`` adds a calibration effect to a named
-    cause); ``warm``: the named cause ``cand`` extends (its fits start from ``warm``'s).
+    cause); ``warm``: the candidates ``cand`` joins (its fits start from theirs, fold by
+    fold: the named cause's and the added effect's fitted alone).
     The candidate's held-out replays do not depend on the reference: judged again (an added
     cause, then against the nominal model), it reuses them."""
     if hz is None or reference is None:
@@ -203,10 +204,10 @@ def _judge_long(problem: Problem, hz: tuple | None, cand: Candidate,
     blocks, halves = hz
     if cand.long is None:
         replays = horizon.held_out(problem, blocks, cand.effects, cand.channel,
-                                   None if warm is None else warm.long.replays.models)
+                                   _merged([c.long.replays.models for c in warm]))
         cand.long_half = (None if halves is None else
                           horizon.held_out(problem, halves, cand.effects, cand.channel,
-                                           None if warm is None else warm.long_half.models))
+                                           _merged([c.long_half.models for c in warm])))
     else:
         replays = cand.long.replays
     half = None if halves is None else (cand.long_half, reference[1], halves)
@@ -216,6 +217,14 @@ def _judge_long(problem: Problem, hz: tuple | None, cand: Candidate,
     cand.long_significant = (cand.long.p_value < ALPHA and cand.long.gain_relative >= MIN_GAIN
                              and (drift >= material or increment))
     cand.significant = cand.short_significant or cand.long_significant
+
+
+def _merged(per_source: list[list[dict]]) -> list[dict] | None:
+    """Per fold, the union of the sources' fitted models (starting values of a joint fit)."""
+    if not per_source:
+        return None
+    return [{k: v for models in fold for k, v in models.items()}
+            for fold in zip(*per_source, strict=True)]
 
 
 def _long_ratio(cand: Candidate, base: tuple) -> float:
@@ -313,14 +322,19 @@ def select(problem: Problem, progress: bool = False, logs: list | None = None) -
         while rest:
             trials = []
             for name in rest:
+                # each part starts from its own fit, fold by fold: the named cause's, and the
+                # added effect's fitted alone (no second search for its start, e.g. a patch)
+                alone = next(c for c in candidates if c.effects == (name,))
                 joint = cross_validate(problem, (*current.effects, name), folds,
-                                       starts=[f.params for f in current.fold_fits])
+                                       starts=_merged([[f.params for f in current.fold_fits],
+                                                       [f.params for f in alone.fold_fits]]))
                 calibration = effect(name).calibration
                 _judge(problem, joint, current.errors, increment=calibration)
                 if not joint.short_significant:  # the long route only where needed (cost)
                     _judge_long(problem, hz, joint, None if current.long is None
                                 else (current.long.replays, current.long_half),
-                                increment=calibration, warm=current)
+                                increment=calibration,
+                                warm=(current, alone) if alone.long is not None else ())
                 if joint.significant:
                     trials.append(joint)
             if not trials:

@@ -176,3 +176,15 @@ def test_real_session_of_one_clockwise_and_one_counter_clockwise_run_gets_track_
     assert report["cause"] == "track_width", report["candidates"]
     value, se = report["parameters"]["track_width_m"]
     assert value == pytest.approx(0.2025, abs=3 * se + 5e-4)
+
+
+def test_a_joint_fit_starts_each_fold_from_the_cause_and_the_added_effect_fitted_alone():
+    from slipenv.diagnose.select import _merged
+
+    cause = [{"turning_slip": "t0"}, {"turning_slip": "t1"}]
+    alone = [{"soil_patch": "p0"}, {"soil_patch": "p1"}]
+    assert _merged([cause, alone]) == [{"turning_slip": "t0", "soil_patch": "p0"},
+                                       {"turning_slip": "t1", "soil_patch": "p1"}]
+    assert _merged([]) is None
+    with pytest.raises(ValueError):  # folds must line up
+        _merged([cause, alone[:1]])
