@@ -138,9 +138,7 @@ def unpack(effects: tuple[str, ...], x) -> dict[str, Term]:
 def param_count(effects: tuple[str, ...]) -> int:
     """Number of fitted parameters of ``effects`` (a layout field counts: chosen from the
     data, it is a degree of freedom of the model; a redundant one held is not)."""
-    return sum(len(effect(name).fields())
-               - sum(other in effects for other in effect(name).redundant.values())
-               for name in effects)
+    return sum(len(effect(name).fields()) - len(effect(name).held(effects)) for name in effects)
 
 
 def layout(effects: tuple[str, ...], seg: Segments) -> list[tuple[str, Bound]]:
@@ -215,8 +213,7 @@ def fit(problem: Problem, effects: tuple[str, ...], index: np.ndarray | None = N
     # layout fields (``Effect.fixed``): set by the start, never moved by the optimiser
     fixed = {f"{name}.{f}" for name in effects for f in effect(name).fixed}
     # a degree of freedom another fitted effect already carries: held at its start
-    held = {f"{name}.{f}" for name in effects
-            for f, other in effect(name).redundant.items() if other in effects}
+    held = {f"{name}.{f}" for name in effects for f in effect(name).held(effects)}
     free = np.array([n not in fixed and n not in held for n in names])
 
     def solve(values: dict[str, float], evals: int):

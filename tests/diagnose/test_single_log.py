@@ -17,6 +17,9 @@ from slipenv.diagnose.report import write_human_report, write_json
 
 Z_LIMIT = 3.0
 OPTIODOM = Path(__file__).resolve().parents[3] / "shared" / "data" / "real" / "optiodom-diffdrive"
+needs_optiodom = pytest.mark.skipif(not OPTIODOM.is_dir(), reason=(
+    f"the real OptiOdom logs are not at {OPTIODOM} (they sit in shared/data/real beside the "
+    "checkout; the kinematic tests in this file cover the method)"))
 
 
 def _diagnose(log):
@@ -90,9 +93,7 @@ def test_sign_flip_is_exact_for_few_blocks():
     assert horizon.sign_flip(np.zeros(4)) == 1.0
 
 
-@pytest.mark.skipif(not OPTIODOM.is_dir(), reason=(
-    f"the real OptiOdom logs are not at {OPTIODOM} (they sit in shared/data/real beside the "
-    "checkout; the kinematic tests above cover the method)"))
+@needs_optiodom
 @pytest.mark.parametrize("name", ["circular_250620202119_run-05",
                                   "square_230620202144_run-06"])
 def test_single_real_optiodom_drifting_run_gets_a_geometric_cause(name):
@@ -148,7 +149,7 @@ def _optiodom_session(session: str) -> list:
     return [load_optiodom_run(r) for r in list_optiodom_runs(OPTIODOM) if session in r.name]
 
 
-@pytest.mark.skipif(not OPTIODOM.is_dir(), reason=f"the real OptiOdom logs are not at {OPTIODOM}")
+@needs_optiodom
 def test_real_circle_session_driven_both_ways_names_track_width_and_wheel_radii_together():
     # three runs each way: -7.6° one way, +9.9° the other, which one parameter cannot make
     with warnings.catch_warnings():
@@ -166,7 +167,7 @@ def test_real_circle_session_driven_both_ways_names_track_width_and_wheel_radii_
     assert cal["wheel_separation_m"][0] == pytest.approx(0.2025, abs=1e-3)
 
 
-@pytest.mark.skipif(not OPTIODOM.is_dir(), reason=f"the real OptiOdom logs are not at {OPTIODOM}")
+@needs_optiodom
 def test_real_session_of_one_clockwise_and_one_counter_clockwise_run_gets_track_width():
     runs = _optiodom_session("circular_250620202345")
     assert len(runs) == 2

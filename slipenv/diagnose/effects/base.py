@@ -367,6 +367,10 @@ class Effect:
         """The :class:`Confound` of vehicle ``kind``, None if its physics shows as itself."""
         return next((c for c in self.confounds if c.kind == kind), None)
 
+    def held(self, effects: tuple[str, ...]) -> tuple[str, ...]:
+        """Fields held at their start when fitted together with ``effects`` (``redundant``)."""
+        return tuple(f for f, other in self.redundant.items() if other in effects)
+
     def fields(self) -> tuple[str, ...]:
         """The parameter fields, in the order of the fitted vector."""
         return tuple(f.name for f in dataclasses.fields(self.params))

@@ -47,7 +47,7 @@ from slipenv.diagnose.effects.base import (
     side_values,
     stiffness_nm,
 )
-from slipenv.diagnose.effects.world import WorldEdit
+from slipenv.diagnose.effects.world import G_MPS2, WorldEdit
 from slipenv.diagnose.segments import Segments
 
 
@@ -80,9 +80,6 @@ def bounds(seg: Segments) -> dict[str, Bound]:
 
 def apply(edit: WorldEdit, p: TorqueSlip) -> None:
     edit.slip_options["long_scale"] = p.stiffness_nm() / edit.channel_stiffness()
-
-
-G_MPS2 = 9.81  # [m/s^2]
 
 
 def grade_torque_nm(ctx: DrawContext) -> float:
