@@ -362,6 +362,12 @@ class Effect:
                              f"parameters are {list(names)}")
         if self.channel not in ("pose", "gyro"):
             raise ValueError(f"effect {self.name!r}: channel must be 'pose' or 'gyro'")
+        if not isinstance(self.calibration, bool):
+            raise ValueError(f"effect {self.name!r}: calibration must be True or False")
+        for f, other in self.redundant.items():
+            if f not in names or not isinstance(other, str) or other == self.name:
+                raise ValueError(f"effect {self.name!r}: redundant maps its own fields "
+                                 f"{list(names)} to another effect's id, got {f!r}: {other!r}")
 
     def confound(self, kind: str) -> Confound | None:
         """The :class:`Confound` of vehicle ``kind``, None if its physics shows as itself."""
