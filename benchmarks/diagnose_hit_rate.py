@@ -22,7 +22,8 @@ The generator's seeds change every run (printed; pass ``--seed`` to repeat a run
 wheel-speed noise, no physics engine) on N seeds of each of: a 1 % track-width error, a
 right wheel 1.5 % larger together with a 2 % wider track (both must be named), a one-way
 circle with the 1 % track-width error (a geometric cause, flagged not separable), and a clean
-log (``none``).
+log (``none``); for the first two, also whether the fitted radii and track width lie within
+3 reported standard errors of those set.
 
 ``--kinds N`` runs the kinematic generator for every vehicle kind (``diff_drive``,
 ``skid_steer``, ``rover4ws``) and every log length of ``--lengths`` (default 60, 120, 300 s)
@@ -186,7 +187,15 @@ def kinematic_one(job: tuple[str, int, float]) -> dict:
             not report["calibration"]["separable"]
     else:
         ok = named == wanted if not wanted else wanted <= named
-    return {"case": case, "seed": seed, "named": sorted(named), "ok": ok,
+    # the geometry set in the log against the fitted values, in reported standard errors
+    within = None
+    if truth is not None and wanted:
+        set_values = {"radius_left_m": truth.radius_left_m, "radius_right_m": truth.radius_right_m,
+                      "track_width_m": truth.track_width_m}
+        fitted = {k: v for k, v in report["parameters"].items() if k in set_values}
+        within = ok and bool(fitted) and all(
+            abs(v[0] - set_values[k]) <= Z_LIMIT * v[1] for k, v in fitted.items())
+    return {"case": case, "seed": seed, "named": sorted(named), "ok": ok, "within": within,
             "s": time.perf_counter() - t0}
 
 
@@ -195,12 +204,15 @@ def kinematic_table(n: int, duration: float, jobs: int) -> str:
     work = [(case, seed, duration) for case in KINEMATIC_CASES for seed in range(n)]
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         results = list(pool.map(kinematic_one, work))
-    rows = [f"| kinematic case ({duration:g} s logs) | logs | right | rate | mean time |",
-            "|---|---|---|---|---|"]
+    rows = [f"| kinematic case ({duration:g} s logs) | logs | right | rate | "
+            f"right, parameters within {Z_LIMIT:g} SE | mean time |",
+            "|---|---|---|---|---|---|"]
     for case in KINEMATIC_CASES:
         rs = [r for r in results if r["case"] == case]
         hits = sum(r["ok"] for r in rs)
-        rows.append(f"| {case} | {len(rs)} | {hits} | {100 * hits / len(rs):.0f} % | "
+        within = ("–" if KINEMATIC_CASES[case][2] in (None, set())
+                  else f"{sum(bool(r['within']) for r in rs)}/{len(rs)}")
+        rows.append(f"| {case} | {len(rs)} | {hits} | {100 * hits / len(rs):.0f} % | {within} | "
                     f"{np.mean([r['s'] for r in rs]):.1f} s |")
     return "\n".join(rows)
 

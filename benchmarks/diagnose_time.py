@@ -1,9 +1,11 @@
 """Wall time of ``slipenv diagnose`` on a 5-minute, 20 Hz log (JSON + full human report).
 
-Generates three kinds of log — a skid-steer vehicle with turning slip (Endo's exponent needs
-several starts), a differential-drive one with a soil patch (the disc search), and the
-slowest configuration seen, a skid-steer vehicle with a torque column (every slip law and
-their joint fits are tried) — writes each, and times the command line end to end, PyBullet
+Generates seven logs — a skid-steer vehicle with turning slip (Endo's exponent needs
+several starts), a differential-drive one with a soil patch (the disc search), a skid-steer
+vehicle with a torque column (every slip law and their joint fits are tried), torque slip
+hidden on the skid-steer, tracked and rover vehicles (the slowest logs of the PyBullet
+hit-rate table: forward selection refits the joint models fold by fold on the long route)
+and a clean tracked log — writes each, and times the command line end to end, PyBullet
 replay for the report included. Limit the process to 2 cores to match the requirement, e.g.
 ``taskset -c 0,1 python benchmarks/diagnose_time.py``.
 """
@@ -31,7 +33,11 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         cases = (("turning_slip", "skid_steer", None), ("soil_patch", "diff_drive", None),
-                 ("rolling_radius", "skid_steer", {"cmd", "torque", "imu"}))
+                 ("rolling_radius", "skid_steer", {"cmd", "torque", "imu"}),
+                 # the slowest logs of the PyBullet hit-rate table: torque slip on the
+                 # skid-steer and tracked vehicles (named turning_slip, a calibration added)
+                 ("torque_slip", "skid_steer", None), ("torque_slip", "tracked", None),
+                 ("torque_slip", "rover4ws", None), ("none", "tracked", None))
         for effect, kind, columns in cases:
             synth = generate(args.seed, effect, kind, duration_s=args.duration, columns=columns)
             folder = write_log(synth.log, Path(tmp) / effect)

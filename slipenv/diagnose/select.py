@@ -32,7 +32,9 @@ the best) is preferred: parsimony, so that a track-width change is not
 called turning slip. Further effects are added one at a time ("also", forward selection over
 every testable effect that helps alone on either route) while the joint model passes the same
 three tests against the current one, except that a calibration effect (wheel radii, track
-width: ``Effect.calibration``) need not be material on its own once a cause is named; the
+width: ``Effect.calibration``) need not be material on its own once a cause is named, and a
+local effect (``Effect.local``: soil under part of the route) is added on the short route
+only; the
 joint model is then fitted on all segments, its parameters reported with their joint
 covariance.
 """
@@ -330,7 +332,9 @@ def select(problem: Problem, progress: bool = False, logs: list | None = None) -
                                                        [f.params for f in alone.fold_fits]]))
                 calibration = effect(name).calibration
                 _judge(problem, joint, current.errors, increment=calibration)
-                if not joint.short_significant:  # the long route only where needed (cost)
+                # the long route only where needed (cost), and not for a local effect
+                # (``Effect.local``: it shows on the short segments that cross it)
+                if not joint.short_significant and not effect(name).local:
                     _judge_long(problem, hz, joint, None if current.long is None
                                 else (current.long.replays, current.long_half),
                                 increment=calibration,

@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from slipenv.contracts.constants import G_MPS2
 from slipenv.diagnose.extension import extend
 from slipenv.diagnose.select import Selection
 from slipenv.diagnose.slip_law import ScaledSlip
@@ -77,7 +78,7 @@ def generic_vehicle(log: Log) -> VehicleSpec:
         chassis_center_height_m=0.5 * size[2], wheels=wheels, channels=("left", "right"),
         track_width_m=w if meta.kind == "diff_drive" else 2 * half_w,
         wheel_radius_nominal_m=r, max_wheel_speed_rad_s=1e3,
-        max_wheel_torque_nm=20.0 * mass * 9.81 * r, max_speed_mps=1.0, max_yaw_rate_rad_s=1.0,
+        max_wheel_torque_nm=20.0 * mass * G_MPS2 * r, max_speed_mps=1.0, max_yaw_rate_rad_s=1.0,
         counts_per_rad=meta.counts_per_rad)
 
 

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from slipenv.contracts.constants import G_MPS2
 from slipenv.estimators.base import Estimator, OdometryGeometry
 from slipenv.estimators.dead_reckoning import DeadReckoning
 from slipenv.estimators.gyrodometry import Gyrodometry
@@ -86,7 +87,7 @@ def default_k_s_prior(spec: VehicleSpec) -> float:
     """Torque/slip gradient prior [N m]: C ≈ 2 W per wheel (traction coefficient ~0.5 at 25 %
     slip, typical of agricultural soils), k_s = r C. Known to the operator from the vehicle's
     weight alone; the filter estimates the real value (Lindgren §4)."""
-    per_wheel_n = spec.mass_kg * 9.81 / len(spec.wheels)
+    per_wheel_n = spec.mass_kg * G_MPS2 / len(spec.wheels)
     return 2.0 * spec.wheel_radius_nominal_m * per_wheel_n
 
 

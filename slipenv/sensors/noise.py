@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
-G_MPS2 = 9.81
 # Largest value of each field that still describes a working sensor (beyond it the reading
 # is noise, not a measurement): 1 g^2 accelerometer variance, 1 (rad/s)^2 gyro variance and
 # 1 rad/s bias, 100 % torque noise, a 100x torque scale, pi rad angle noise.

@@ -11,8 +11,9 @@ import math
 import numpy as np
 
 from slipenv.contracts.angles import wrap_angle
+from slipenv.contracts.constants import G_MPS2
 from slipenv.contracts.frame import SensorFrame
-from slipenv.sensors.noise import G_MPS2, SensorNoise
+from slipenv.sensors.noise import SensorNoise
 from slipenv.sim.simulator import VehicleTruth
 
 

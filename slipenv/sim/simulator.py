@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from slipenv.contracts.constants import G_MPS2
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.track_soil import TrackSoilInjector
 from slipenv.sim.wheel_soil import WheelSoilInjector
@@ -26,7 +27,7 @@ from slipenv.vehicles.spec import VehicleSpec
 
 p = import_pybullet()  # the banner-free first import (see slipenv.pybullet_quiet)
 
-GRAVITY_MPS2 = 9.81
+GRAVITY_MPS2 = G_MPS2
 _PARKING_HEIGHT_M = 1e4  # [m] where a body waits, clear of any terrain, while rewound
 
 

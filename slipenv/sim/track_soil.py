@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from slipenv.contracts.constants import G_MPS2
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.wheel_soil import WheelContactState
 from slipenv.terramechanics.models import ForceModel
@@ -88,7 +89,7 @@ class TrackModelParams:
 
     n_cells: int = 16
     direction_length_m: float = 1e-3
-    unit_weight_n_m3: float = 1.335e3 * 9.81
+    unit_weight_n_m3: float = 1.335e3 * G_MPS2
     damping_ratio: float = 1.0
     resistance_speed_mps: float = 1e-3
     max_wall_height_m: float | None = None

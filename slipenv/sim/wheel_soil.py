@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from slipenv.contracts.constants import G_MPS2
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.bullet_native import PYBULLET_API_ENV, client_table, python_api_forced
 from slipenv.sim.compiled import wheel_loop_module
@@ -62,7 +63,6 @@ from slipenv.vehicles.spec import VehicleSpec
 
 p = import_pybullet()  # the banner-free first import (see slipenv.pybullet_quiet)
 
-_G = 9.81  # [m/s^2] gravity, for the static load share the dampers are sized at
 _DS = 1e-3  # [-] slip step of the finite-difference slip stiffness
 
 
@@ -374,19 +374,19 @@ class WheelSoilInjector:
     def static_sinkage_m(self, k: int) -> float:
         """Bekker sinkage z [m] of wheel ``k`` under its static load share (Wong Ch. 5)."""
         sp = self._soil_rows[k]
-        load = self.mass_share_kg * _G
+        load = self.mass_share_kg * G_MPS2
         return _wheel_sinkage_m(load, self.width[k], 2.0 * self.radius[k], _bekker_row(sp))
 
     def _relaxation_m(self, soil_params: SoilParams, k: int) -> float:
         """σ of wheel ``k``: the front contact arc at its static sinkage (road wheels too)."""
-        load = self.mass_share_kg * _G
+        load = self.mass_share_kg * G_MPS2
         z = _wheel_sinkage_m(load, self.width[k], 2.0 * self.radius[k], _bekker_row(soil_params))
         return contact_relaxation_length_m(self.radius[k], z, self.min_relaxation_m)
 
     def _resistance_damping(self, k: int) -> float:
         """Pre-sliding damper c [N s/m] of wheel ``k``'s resistance element: ``damping_ratio``
         of critical for the spring R/x_0 at the static load share (capped as the soil dampers)."""
-        load = self.mass_share_kg * _G
+        load = self.mass_share_kg * G_MPS2
         res = self._kernels[k](0.0, 0.0, load)[2]
         cap = 0.5 * self.mass_share_kg / self.dt_s
         return critical_damping_ns_per_m(res, self.resistance_stick_m, self.mass_share_kg,
@@ -410,7 +410,7 @@ class WheelSoilInjector:
         """
         if not self.driven[k]:
             return 0.0, 0.0
-        load = self.mass_share_kg * _G
+        load = self.mass_share_kg * G_MPS2
         fx, _, _ = self._kernels[k](_DS, 0.0, load)
         _, fy, _ = self._kernels[k](0.0, _DS, load)
         sigma = self.dt_s / self._h[k]

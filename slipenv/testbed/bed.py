@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from slipenv.contracts.constants import G_MPS2
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.wheel_soil import WheelSoilInjector
 from slipenv.terrain.terrain import TerrainSpec, build_terrain
@@ -40,7 +41,6 @@ p = import_pybullet()
 
 __all__ = ["BedWheel", "REINA_WHEEL", "Trial", "VirtualTestBed"]
 
-_G = 9.81  # [m/s^2] the bed's gravity
 
 
 @dataclass(frozen=True)
@@ -60,7 +60,7 @@ class BedWheel:
     radius_m: float = 0.092
     width_m: float = 0.110
     contact_length_m: float = 0.05
-    load_n: float = 6.6 * _G
+    load_n: float = 6.6 * G_MPS2
 
     def __post_init__(self) -> None:
         for name in ("radius_m", "width_m", "contact_length_m", "load_n"):
@@ -127,7 +127,7 @@ class VirtualTestBed:
             raise ValueError(f"soil must be a Soil or a soil map, got {soil!r}")
         self.wheel, self.dt_s, self.force_model = wheel, float(dt_s), force_model
         self.client = c = p.connect(p.DIRECT)
-        p.setGravity(0, 0, -_G, physicsClientId=c)
+        p.setGravity(0, 0, -G_MPS2, physicsClientId=c)
         p.setTimeStep(self.dt_s, physicsClientId=c)
         self._ground = build_terrain(TerrainSpec(), c)
         self._soil, self._body, self._injector, self._beta = soil, None, None, None
@@ -139,7 +139,7 @@ class VirtualTestBed:
             p.removeBody(self._body, physicsClientId=c)
         col = p.createCollisionShape(p.GEOM_SPHERE, radius=w.radius_m, physicsClientId=c)
         wheel_kg = 0.5
-        ballast_kg = w.load_n / _G - wheel_kg
+        ballast_kg = w.load_n / G_MPS2 - wheel_kg
         if ballast_kg <= 0.0:
             raise ValueError(f"BedWheel.load_n={w.load_n!r} must exceed the wheel's own weight")
         yaw = p.getQuaternionFromEuler((0.0, 0.0, -slip_angle_rad))

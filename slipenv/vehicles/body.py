@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import pybullet_data
 
+from slipenv.contracts.constants import G_MPS2
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.vehicles.spec import VehicleSpec
 
@@ -75,7 +76,7 @@ def build_vehicle(
     # Compliant wheel-ground contact: stiffness from the static sinkage under an equal share of
     # the weight, damping at 0.7 of critical for that share (see VehicleSpec.contact_sinkage_m).
     share_kg = spec.mass_kg / len(spec.wheels)
-    stiffness = share_kg * 9.81 / spec.contact_sinkage_m
+    stiffness = share_kg * G_MPS2 / spec.contact_sinkage_m
     damping = 2.0 * 0.7 * math.sqrt(stiffness * share_kg)
     for link in body.wheel_links:
         p.changeDynamics(body.body_id, link, contactStiffness=stiffness, contactDamping=damping,

@@ -189,3 +189,27 @@ def test_a_joint_fit_starts_each_fold_from_the_cause_and_the_added_effect_fitted
     assert _merged([]) is None
     with pytest.raises(ValueError):  # folds must line up
         _merged([cause, alone[:1]])
+
+
+def test_a_local_effect_added_to_a_named_cause_is_judged_on_the_short_segments_only(monkeypatch):
+    from slipenv.diagnose import select as selection
+    from slipenv.diagnose.effects import EFFECTS, effect
+
+    assert {n for n in EFFECTS if effect(n).local} == {"soil_patch", "soil_map"}
+    judged_long: list[tuple[str, ...]] = []
+    judge_long = selection._judge_long
+
+    def recording(problem, hz, cand, reference, **kw):
+        judged_long.append(cand.effects)
+        judge_long(problem, hz, cand, reference, **kw)
+
+    monkeypatch.setattr(selection, "_judge_long", recording)
+    # right wheel 1.5 % larger, with a torque column: soil effects are testable
+    log = kinematic_log(31, KinematicTruth(0.1, 0.1015, 0.5), duration_s=60.0, with_torque=True)
+    report, _ = _diagnose(log)
+    assert report["cause"] == "rolling_radius", report["candidates"]
+    joints = [e for e in judged_long if len(e) > 1]
+    assert joints, "forward selection tried no joint model on the long route"
+    # alone, every effect is judged on both routes; joined to the cause, soil never on the long
+    assert {e for e in judged_long if len(e) == 1} >= {("soil_patch",), ("soil_map",)}
+    assert not [e for e in joints if {"soil_patch", "soil_map"} & set(e)]

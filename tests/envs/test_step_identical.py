@@ -43,11 +43,23 @@ def _entries(reference: dict[str, np.ndarray], name: str) -> dict[str, np.ndarra
     return {k.split("|", 1)[1]: v for k, v in reference.items() if k.split("|", 1)[0] == name}
 
 
+# The estimator's own outputs: the numpy Lindgren EKF's matrix products go through BLAS, whose
+# kernels (chosen per CPU at run time) may round the last bit differently on another machine
+# (seen: 2e-14 relative on an AMD EPYC against the recording machine). Everything else, the
+# observation included, stays bit for bit.
+_BLAS_KEYS = ("info.estimated_pose", "info.estimator_extras.")
+_BLAS_RTOL = 1e-12
+
+
 def _assert_identical(now: dict[str, np.ndarray], ref: dict[str, np.ndarray], name: str) -> None:
     assert sorted(now) == sorted(ref), f"{name}: the recorded entries changed"
     for key, value in now.items():
         assert value.shape == ref[key].shape, f"{name} {key}"
-        np.testing.assert_array_equal(value, ref[key], err_msg=f"{name} {key}")
+        if key.startswith(_BLAS_KEYS) and value.dtype.kind == "f":
+            np.testing.assert_allclose(value, ref[key], rtol=_BLAS_RTOL, atol=0.0,
+                                       err_msg=f"{name} {key}")
+        else:
+            np.testing.assert_array_equal(value, ref[key], err_msg=f"{name} {key}")
 
 
 def test_reference_covers_every_registered_env_and_the_camera(reference):

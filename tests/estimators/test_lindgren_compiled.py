@@ -88,8 +88,13 @@ def test_compiled_filter_agrees_with_numpy_reference_over_a_farmfield_length_run
         if recs:
             assert y_c.shape == y.shape and S_c.shape == S.shape
             assert _rel_err(y_c, y) <= BOUND and _rel_err(S_c, S) <= BOUND
+    # bearings took part: nearly every step, except in scheme 3, which ignores the torque's
+    # slip, so its gate rejects the bearings of the stretches it drifts on (a fifth of the
+    # run; how many sit on the gate's edge depends on the last bits of the BLAS's products:
+    # 687 rejected on an AMD EPYC, fewer on the machine this test was written on)
     if variant != "s2":
-        assert len(ref.history["bearing"]) > 0.8 * FARMFIELD_STEPS  # bearings took part
+        share = 0.6 if variant == "s3" else 0.9
+        assert len(ref.history["bearing"]) > share * FARMFIELD_STEPS
     # the filter tracks the truth, so this is not the agreement of two diverged filters
     # (scheme 2 dead-reckons; scheme 3 ignores the slip the torque causes)
     err = np.hypot(*(x_c[-1, :2] - farmfield_run.truth[-1, :2]))

@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from slipenv.sensors.noise import G_MPS2, SensorNoise
+from slipenv.contracts.constants import G_MPS2
+from slipenv.sensors.noise import SensorNoise
 from slipenv.sensors.onboard import Compass, Imu, SensorSuite, WheelEncoders
 from slipenv.sim.simulator import VehicleTruth
 

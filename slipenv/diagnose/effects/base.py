@@ -332,6 +332,11 @@ class Effect:
         Fields that are the same degree of freedom as another effect's parameters, by that
         effect's id: held at their bounds' start when it is fitted too (combined slip's s_x0
         scales every wheel's travel by 1 - s_x0, as a common wheel radius does).
+    local : bool
+        The effect acts on part of the ground only (a soil patch, a soil map): it shows on
+        the short segments that cross it, which is what the short route weighs. Added to a
+        named cause it is judged on the short route only: the long route, which refits the
+        model on every block replayed whole, is for slow drifts, and is the costliest step.
     """
 
     name: str
@@ -352,6 +357,7 @@ class Effect:
     fixed: tuple[str, ...] = ()
     calibration: bool = False
     redundant: dict[str, str] = field(default_factory=dict)
+    local: bool = False
 
     def __post_init__(self) -> None:
         names = self.fields()
@@ -362,8 +368,9 @@ class Effect:
                              f"parameters are {list(names)}")
         if self.channel not in ("pose", "gyro"):
             raise ValueError(f"effect {self.name!r}: channel must be 'pose' or 'gyro'")
-        if not isinstance(self.calibration, bool):
-            raise ValueError(f"effect {self.name!r}: calibration must be True or False")
+        for flag in ("calibration", "local"):
+            if not isinstance(getattr(self, flag), bool):
+                raise ValueError(f"effect {self.name!r}: {flag} must be True or False")
         for f, other in self.redundant.items():
             if f not in names or not isinstance(other, str) or other == self.name:
                 raise ValueError(f"effect {self.name!r}: redundant maps its own fields "

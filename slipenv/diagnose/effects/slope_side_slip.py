@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from slipenv.contracts.constants import G_MPS2
 from slipenv.diagnose.effects.base import (
     Bound,
     DrawContext,
@@ -25,7 +26,7 @@ from slipenv.diagnose.effects.base import (
     Term,
     finite,
 )
-from slipenv.diagnose.effects.world import G_MPS2, WorldEdit
+from slipenv.diagnose.effects.world import WorldEdit
 from slipenv.diagnose.segments import Segments
 
 _MIN_ROLL_RANGE_RAD = np.radians(2.0)  # roll must vary this much for β_roll to be identifiable

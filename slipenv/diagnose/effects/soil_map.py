@@ -316,4 +316,5 @@ EFFECT = Effect(
               *(Scalar(f"cell_{i}", f"map_cell_{i}") for i in range(_N_CELLS)),
               *(Scalar(name, f"c_region{k}_per_nm") for k, name in enumerate(_LEVELS))),
     mechanism="torque slip law", fixed=_FIXED,
+    local=True,
 )

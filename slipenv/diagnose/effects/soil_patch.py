@@ -145,4 +145,5 @@ EFFECT = Effect(
                       reciprocal=True)),
     mechanism="torque slip law", clash_prefix="patch_",
     hiding=Hiding(("diff_drive",), draw, random_slope=False, columns=frozenset({"torque"})),
+    local=True,
 )

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from slipenv.contracts.constants import G_MPS2
 from slipenv.diagnose.effects.base import (
     Bound,
     Confound,
@@ -47,7 +48,7 @@ from slipenv.diagnose.effects.base import (
     side_values,
     stiffness_nm,
 )
-from slipenv.diagnose.effects.world import G_MPS2, WorldEdit
+from slipenv.diagnose.effects.world import WorldEdit
 from slipenv.diagnose.segments import Segments
 
 

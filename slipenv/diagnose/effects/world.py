@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from slipenv.contracts.constants import G_MPS2
 from slipenv.diagnose.slip_law import innermost, scaled
 from slipenv.envs.config import SlipEnvConfig
 from slipenv.envs.factory import make_force_model, make_soil_map, make_vehicle
@@ -23,7 +24,6 @@ from slipenv.terramechanics.presets import soil_by_name
 from slipenv.terramechanics.soil import Soil
 from slipenv.vehicles.spec import VehicleSpec
 
-G_MPS2 = 9.81  # [m/s^2]
 _PROBE = 1e-4  # slip (or tan β) of the finite difference giving a stiffness at rest
 
 
