@@ -102,12 +102,15 @@ def main(args) -> int:
 
 def summary(report: dict, seconds: float | None = None) -> str:
     """A few lines for the terminal (never ``inf``/``nan``; see ``numbers.py``)."""
+    from slipenv.diagnose.effects import shown_parameters
     from slipenv.diagnose.numbers import better, estimate, num
 
     g = report["gain"]
     lines = [f"cause: {report['cause']}"
              + (f" (also: {', '.join(report['also'])})" if report["also"] else "")]
-    lines += [f"  {k} = {estimate(v[0], v[1])}" for k, v in report["parameters"].items()]
+    shown, extra = shown_parameters(report["parameters"], [report["cause"], *report["also"]])
+    lines += [f"  {k} = {estimate(v[0], v[1])}" for k, v in shown.items()]
+    lines += [f"  {line}" for line in extra]
     lines += [f"confounded with {c['alternative']}: {c['why']}"
               for c in report.get("confounded", [])]
     lines.append(f"held-out {g['metric']}: {num(g['before'])} -> {num(g['after'])} "

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from slipenv.diagnose import calibration, geometry, replay
-from slipenv.diagnose.effects import effect
+from slipenv.diagnose.effects import effect, shown_parameters
 from slipenv.diagnose.fit import Problem
 from slipenv.diagnose.numbers import (
     better,
@@ -303,9 +303,10 @@ def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
     else:
         also = f" (also: {', '.join(report['also'])})" if report["also"] else ""
         lines += [f"**Cause: {cause}**{also} — {effect(cause).meaning}.", ""]
+        shown, extra = shown_parameters(report["parameters"], [cause, *report["also"]])
         lines += ["| parameter | value ± standard error |", "|---|---|"]
-        lines += [f"| `{k}` | {estimate(v[0], v[1])} |" for k, v in report["parameters"].items()]
-        lines += [""]
+        lines += [f"| `{k}` | {estimate(v[0], v[1])} |" for k, v in shown.items()]
+        lines += [""] + (["```", *extra, "```", ""] if extra else [])
         for c in report.get("confounded", []):
             what = ", ".join(f"`{k}` = {estimate(v[0], v[1])}"
                              for k, v in c.get("determined", {}).items())

@@ -150,3 +150,21 @@ def test_log_without_ground_truth_or_gyro_is_a_clear_error(tmp_path, capsys):
     folder = write_log(_small_log(n=400, gt=False), tmp_path / "bare", require_ground_truth=False)
     assert run(folder) == 2
     assert "nothing to compare" in capsys.readouterr().err
+
+
+def test_a_soil_maps_cells_are_shown_as_a_grid_of_regions_not_a_line_per_cell():
+    from slipenv.diagnose.cli import summary
+    from slipenv.diagnose.effects.soil_map import GRID
+
+    # a 3 x 3 map: the soft region 1 is the north-east corner cell (row 2, column 2)
+    cells = {f"map_cell_{i}": [1.0 if i == 8 else 0.0, 0.0] for i in range(GRID * GRID)}
+    params = {"map_grid": [3.0, 0.0], "map_regions": [2.0, 0.0], **cells,
+              "c_region1_per_nm": [2e-3, 1e-4]}
+    report = {"log": "field", "cause": "soil_map", "also": [], "parameters": params,
+              "gain": {"metric": "position_rmse_m", "before": 0.2, "after": 0.1,
+                       "relative": 0.5}, "segments": {"count": 40}}
+    text = summary(report, 1.0)
+    assert "map_cell_" not in text and "c_region1_per_nm = 0.002 ± 0.0001" in text
+    grid = text.split("north up, west left):\n")[1].splitlines()[:3]
+    assert [row.split() for row in grid] == [["0", "0", "1"], ["0", "0", "0"],
+                                             ["0", "0", "0"]]

@@ -103,7 +103,20 @@ def contract_report(model: dict[str, Term], se: dict[str, dict[str, float]],
     return out
 
 
+def shown_parameters(parameters: dict[str, list[float]], effects: list[str]
+                     ) -> tuple[dict[str, list[float]], list[str]]:
+    """What a report lists of a model's ``{contract name: [value, se]}``: the parameters to
+    show one per line and the lines the ``effects``' ``condense`` hooks add after them."""
+    kept, lines = dict(parameters), []
+    for name in effects:
+        hook = EFFECTS[name].condense if name in EFFECTS else None
+        if hook is not None:
+            kept, more = hook(kept)
+            lines += more
+    return kept, lines
+
+
 _discover()
 
 __all__ = ["EFFECTS", "Effect", "Term", "contract_report", "effect", "effect_ids", "register",
-           "unregister", "why_not"]
+           "shown_parameters", "unregister", "why_not"]

@@ -337,6 +337,10 @@ class Effect:
         the short segments that cross it, which is what the short route weighs. Added to a
         named cause it is judged on the short route only: the long route, which refits the
         model on every block replayed whole, is for slow drifts, and is the costliest step.
+    condense : callable, optional
+        ``{contract name: [value, se]} -> (kept, lines)``: how a report shows its parameters
+        when one line each would bury them (a map's cells as a grid of region numbers):
+        ``kept`` are listed one per line, ``lines`` follow them. None: every one listed.
     """
 
     name: str
@@ -358,6 +362,7 @@ class Effect:
     calibration: bool = False
     redundant: dict[str, str] = field(default_factory=dict)
     local: bool = False
+    condense: Callable[[dict[str, Any]], tuple[dict[str, Any], list[str]]] | None = None
 
     def __post_init__(self) -> None:
         names = self.fields()

@@ -295,6 +295,22 @@ class _Normal:
         return labels
 
 
+def condense(parameters: dict) -> tuple[dict, list[str]]:
+    """The cells' regions as a grid of region numbers (north, the largest y, on top; "."
+    where the grid has no cell) instead of one ``map_cell_<i>`` line per cell."""
+    cells = {k: v for k, v in parameters.items() if k.startswith("map_cell_")}
+    if not cells or "map_grid" not in parameters:
+        return parameters, []
+    kept = {k: v for k, v in parameters.items() if k not in cells}
+    n = int(round(parameters["map_grid"][0]))
+    label = [int(round(cells.get(f"map_cell_{i}", [np.nan])[0]))
+             if np.isfinite(cells.get(f"map_cell_{i}", [np.nan])[0]) else None
+             for i in range(n * n)]
+    rows = [" ".join("." if label[r * n + c] is None else str(label[r * n + c])
+                     for c in range(n)) for r in reversed(range(n))]
+    return kept, [f"map regions by cell ({n} x {n}, north up, west left):", *rows]
+
+
 def apply(edit: WorldEdit, p) -> None:
     """Every cell of a region with torque slip (c > 0) becomes a rectangle of softer soil."""
     levels = p.levels()
@@ -316,5 +332,5 @@ EFFECT = Effect(
               *(Scalar(f"cell_{i}", f"map_cell_{i}") for i in range(_N_CELLS)),
               *(Scalar(name, f"c_region{k}_per_nm") for k, name in enumerate(_LEVELS))),
     mechanism="torque slip law", fixed=_FIXED,
-    local=True,
+    local=True, condense=condense,
 )
