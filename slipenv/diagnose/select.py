@@ -34,9 +34,8 @@ every testable effect that helps alone on either route) while the joint model pa
 three tests against the current one, except that a calibration effect (wheel radii, track
 width: ``Effect.calibration``) need not be material on its own once a cause is named, and a
 local effect (``Effect.local``: soil under part of the route) is added on the short route
-only; the
-joint model is then fitted on all segments, its parameters reported with their joint
-covariance.
+only; the joint model is then fitted on all segments, its parameters reported with their
+joint covariance.
 """
 
 from __future__ import annotations

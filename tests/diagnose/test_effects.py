@@ -131,10 +131,10 @@ def test_combined_slip_at_zero_slip_angle_is_a_common_wheel_radius_so_it_is_held
     assert effect("combined_slip").redundant == {"s_x0": "rolling_radius"}
 
 
-@pytest.mark.parametrize("bad", [{"calibration": 1}, {"local": "yes"},
+@pytest.mark.parametrize("bad", [{"calibration": 1}, {"local": "yes"}, {"condense": "grid"},
                                  {"redundant": {"no_such_field": "x"}},
                                  {"redundant": {"factor": 3}},
                                  {"redundant": {"factor": "odometer_scale"}}])
-def test_an_effect_with_a_bad_calibration_local_or_redundant_entry_is_refused_when_built(bad):
-    with pytest.raises(ValueError, match="calibration|redundant|local"):
+def test_an_effect_with_a_bad_flag_hook_or_redundant_entry_is_refused_when_built(bad):
+    with pytest.raises(ValueError, match="calibration|redundant|local|condense"):
         dataclasses.replace(TOY, **bad)

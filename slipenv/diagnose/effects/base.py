@@ -376,6 +376,8 @@ class Effect:
         for flag in ("calibration", "local"):
             if not isinstance(getattr(self, flag), bool):
                 raise ValueError(f"effect {self.name!r}: {flag} must be True or False")
+        if self.condense is not None and not callable(self.condense):
+            raise ValueError(f"effect {self.name!r}: condense must be a function or None")
         for f, other in self.redundant.items():
             if f not in names or not isinstance(other, str) or other == self.name:
                 raise ValueError(f"effect {self.name!r}: redundant maps its own fields "
