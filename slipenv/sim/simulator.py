@@ -27,7 +27,6 @@ from slipenv.vehicles.spec import VehicleSpec
 
 p = import_pybullet()  # the banner-free first import (see slipenv.pybullet_quiet)
 
-GRAVITY_MPS2 = G_MPS2
 _PARKING_HEIGHT_M = 1e4  # [m] where a body waits, clear of any terrain, while rewound
 
 
@@ -147,7 +146,7 @@ class Simulator:
         # A simulator dropped without close() (a notebook, a sweep) must not keep its client
         # (~40 MiB) connected: the finalizer holds the client id only, never ``self``.
         self._finalizer = weakref.finalize(self, _disconnect, self.client)
-        p.setGravity(0, 0, -GRAVITY_MPS2, physicsClientId=self.client)
+        p.setGravity(0, 0, -G_MPS2, physicsClientId=self.client)
         p.setTimeStep(self.dt_s, physicsClientId=self.client)
         self.terrain = build_terrain(terrain, self.client)
         self.force_model, self.soil_map = force_model, soil_map
@@ -317,7 +316,7 @@ class Simulator:
         else:
             acc = tuple((v_ref[i] - self._prev_vel[i]) / self.control_dt_s for i in range(3))
         self._prev_vel = v_ref
-        specific = to_body((acc[0], acc[1], acc[2] + GRAVITY_MPS2))
+        specific = to_body((acc[0], acc[1], acc[2] + G_MPS2))
         roll, pitch, yaw = p.getEulerFromQuaternion(quat)
         angles, channel_torque = self._channel_angles_and_torques()
         return VehicleTruth(

@@ -42,7 +42,6 @@ p = import_pybullet()
 __all__ = ["BedWheel", "REINA_WHEEL", "Trial", "VirtualTestBed"]
 
 
-
 @dataclass(frozen=True)
 class BedWheel:
     """The wheel on the bed and its vertical load.

@@ -303,11 +303,9 @@ def condense(parameters: dict) -> tuple[dict, list[str]]:
         return parameters, []
     kept = {k: v for k, v in parameters.items() if k not in cells}
     n = int(round(parameters["map_grid"][0]))
-    label = [int(round(cells.get(f"map_cell_{i}", [np.nan])[0]))
-             if np.isfinite(cells.get(f"map_cell_{i}", [np.nan])[0]) else None
-             for i in range(n * n)]
-    rows = [" ".join("." if label[r * n + c] is None else str(label[r * n + c])
-                     for c in range(n)) for r in reversed(range(n))]
+    values = [float(cells.get(f"map_cell_{i}", [np.nan])[0]) for i in range(n * n)]
+    label = [str(int(round(v))) if np.isfinite(v) else "." for v in values]
+    rows = [" ".join(label[r * n:(r + 1) * n]) for r in reversed(range(n))]
     return kept, [f"map regions by cell ({n} x {n}, north up, west left):", *rows]
 
 
