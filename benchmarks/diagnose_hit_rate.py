@@ -39,9 +39,11 @@ mean diagnosis time.
     python benchmarks/diagnose_hit_rate.py --n 0 --soil 10
 
 ``--soil N`` diagnoses N kinematic logs (seeds 3 … N + 2; seed 3 is the tests' log) of an
-8 m field swept lane by lane for 3 minutes over two rectangles of softer soil (those of
-``tests/diagnose/test_kinds_and_soil_map.py``) and prints what each is named, with the soil
-map's held-out error ratio and p on the short segments and its gain on the long route.
+8 m field swept lane by lane for 3 minutes over each soil layout of ``SOIL_LAYOUTS`` (two
+rectangles, those of ``tests/diagnose/test_kinds_and_soil_map.py``; two rectangles turned
+30 degrees to the lanes; a disc and an L-shaped field) and prints what each is named, the
+soil map's regions, its held-out error ratio and p on the short segments and its gain on the
+long route.
 """
 
 from __future__ import annotations
@@ -265,38 +267,72 @@ def kinds_table(n: int, lengths: list[float], jobs: int) -> str:
     return "\n".join(rows)
 
 
-SOIL_REGIONS = ((-4.0, -4.0, -0.5, 0.0, 0.008), (1.0, 0.5, 4.0, 4.0, 0.006))
+# soil layouts of the field logs: (x0, y0, x1, y1, compliance [1/(N m)], angle [rad])
+# rectangles and (centre x, centre y, radius, compliance) discs, in the 8 m field [-4, 4]^2
+SOIL_LAYOUTS = {
+    # two rectangles not aligned with the lanes' ends (the tests' layout)
+    "two rectangles": ((-4.0, -4.0, -0.5, 0.0, 0.008, 0.0), (1.0, 0.5, 4.0, 4.0, 0.006, 0.0)),
+    # the same kind of fields turned 30 deg to the lanes
+    "two turned rectangles": ((-3.5, -3.0, -0.5, -0.5, 0.008, 0.52),
+                              (0.5, 0.5, 3.5, 3.0, 0.006, 0.52)),
+    # a disc and an L-shaped field (two rectangles of one soil)
+    "disc and L-shape": ((-1.5, 1.5, 1.8, 0.008),
+                         (0.5, -3.5, 3.5, -1.5, 0.006, 0.0), (2.0, -1.5, 3.5, 1.0, 0.006, 0.0)),
+}
 
 
-def soil_one(seed: int) -> dict:
-    """Diagnose one field log with two soft rectangles; the cause and the map's scores."""
+def _soil_regions(layout: str) -> tuple:
+    from slipenv.diagnose.kinematic import SoilDisc, SoilRegion
+
+    return tuple(SoilDisc(*r) if len(r) == 4 else SoilRegion(*r)
+                 for r in SOIL_LAYOUTS[layout])
+
+
+def soil_one(case: tuple[str, int]) -> dict:
+    """Diagnose one field log of a soil layout; the cause and the map's scores."""
     from slipenv.diagnose import replay
     from slipenv.diagnose.fit import Problem
-    from slipenv.diagnose.kinematic import SoilRegion, kinematic_log
+    from slipenv.diagnose.kinematic import kinematic_log
     from slipenv.diagnose.select import select
 
-    regions = tuple(SoilRegion(*r) for r in SOIL_REGIONS)
-    log = kinematic_log(seed, None, duration_s=180.0, route="field", soil_regions=regions)
+    layout, seed = case
+    log = kinematic_log(seed, None, duration_s=180.0, route="field",
+                        soil_regions=_soil_regions(layout))
     seg = replay.build_segments([log])
+    start = time.perf_counter()
     sel = select(Problem.from_segments(seg), logs=[log])
     m = next(c for c in sel.candidates if c.name == "soil_map")
-    return {"seed": seed, "cause": sel.cause, "also": sel.also, "ratio": m.error_ratio,
-            "p": m.p_value, "long_gain": None if m.long is None else m.long.gain_relative}
+    final = sel.fits.get(m.channel)  # the named model, when the map is in it
+    return {"layout": layout, "seed": seed, "cause": sel.cause, "also": sel.also,
+            "ratio": m.error_ratio, "p": m.p_value,
+            "long_gain": None if m.long is None else m.long.gain_relative,
+            "regions": final.params["soil_map"].regions
+            if final is not None and "soil_map" in final.effects else None,
+            "seconds": time.perf_counter() - start}
 
 
 def soil_table(n: int, jobs: int) -> str:
-    """What the field logs are named (markdown)."""
+    """What the field logs of every soil layout are named (markdown)."""
+    cases = [(layout, seed) for layout in SOIL_LAYOUTS for seed in range(3, 3 + n)]
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        results = list(pool.map(soil_one, range(3, 3 + n)))
-    rows = ["| seed | named | soil_map held-out error ratio | p (short) | gain (long) |",
-            "|---|---|---|---|---|"]
+        results = list(pool.map(soil_one, cases))
+    rows = ["| layout | seed | named | regions | soil_map held-out error ratio | p (short) | "
+            "gain (long) | time |", "|---|---|---|---|---|---|---|---|"]
     for r in results:
         long = "-" if r["long_gain"] is None else f"{r['long_gain']:+.2f}"
-        rows.append(f"| {r['seed']} | {'+'.join([r['cause'], *r['also']])} | "
-                    f"{r['ratio']:.3f} | {r['p']:.2g} | {long} |")
-    named = sum(r["cause"] == "soil_map" or "soil_map" in r["also"] for r in results)
-    rows.append(f"| **soil_map named** | {named}/{len(results)} | | | |")
-    return "\n".join(rows)
+        regions = "-" if r["regions"] is None else str(r["regions"])
+        rows.append(f"| {r['layout']} | {r['seed']} | {'+'.join([r['cause'], *r['also']])} | "
+                    f"{regions} | {r['ratio']:.3f} | {r['p']:.2g} | {long} | "
+                    f"{r['seconds']:.0f} s |")
+    summary = ["", "| layout | soil_map named | held-out error ratio (median, range) |",
+               "|---|---|---|"]
+    for layout in SOIL_LAYOUTS:
+        mine = [r for r in results if r["layout"] == layout]
+        named = sum(r["cause"] == "soil_map" or "soil_map" in r["also"] for r in mine)
+        ratios = [r["ratio"] for r in mine]
+        summary.append(f"| {layout} | {named}/{len(mine)} | {np.median(ratios):.3f} "
+                       f"({min(ratios):.3f}-{max(ratios):.3f}) |")
+    return "\n".join(rows + summary)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -318,7 +354,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--kinds", type=int, default=0,
                         help="seeds per vehicle kind, case and length (default 0: skip)")
     parser.add_argument("--soil", type=int, default=0,
-                        help="field logs with two soil regions (default 0: skip)")
+                        help="field logs per soil layout (default 0: skip)")
     parser.add_argument("--lengths", default="60,120,300",
                         help="comma-separated log lengths [s] of --kinds")
     args = parser.parse_args(argv)

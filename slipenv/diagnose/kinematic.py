@@ -23,9 +23,9 @@ Torque and soil (optional): with ``torque_slip_per_nm`` and/or ``soil_regions`` 
 ``torque_<wheel>`` columns — a drive torque T = T_0 (1 + 0.5 |turn ratio|) (1 + u) with u a
 slow AR(1) load variation (rolling resistance of uneven ground), 20 % standard deviation,
 4 s correlation — and each wheel slips s = c(x, y) T (Lindgren Eq. 24 with compliance
-c = 1/k_s): c is ``torque_slip_per_nm`` everywhere plus, inside each region (an axis-aligned
-rectangle), that region's compliance. A wheel then turns 1/(1 - s) times more than its ground
-travel (the replay's convention g = d - s |d|).
+c = 1/k_s): c is ``torque_slip_per_nm`` everywhere plus, inside each region (a rectangle,
+turned or not, or a disc), that region's compliance. A wheel then turns 1/(1 - s) times
+more than its ground travel (the replay's convention g = d - s |d|).
 
 Routes: ``"mixed"`` (random pieces of 3-10 s, turning both ways, with straights), ``"circle"``
 (one way round, as OptiOdom's calibration circles) and ``"field"`` (a lawn-mower sweep of a
@@ -52,23 +52,49 @@ TORQUE_NM = 5.0  # [N m] T_0, the typical drive torque of the generated robot
 
 @dataclass(frozen=True)
 class SoilRegion:
-    """An axis-aligned rectangle [m] of softer soil with extra torque compliance [1/(N m)]."""
+    """A rectangle [m] of softer soil with extra torque compliance [1/(N m)], turned by
+    ``angle_rad`` (counter-clockwise) about its centre; axis-aligned at the default 0."""
 
     x0_m: float
     y0_m: float
     x1_m: float
     y1_m: float
     compliance_per_nm: float
+    angle_rad: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("x0_m", "y0_m", "x1_m", "y1_m", "compliance_per_nm"):
+        for name in ("x0_m", "y0_m", "x1_m", "y1_m", "compliance_per_nm", "angle_rad"):
             if not np.isfinite(getattr(self, name)):
                 raise ValueError(f"SoilRegion: {name} must be finite")
         if not (self.x1_m > self.x0_m and self.y1_m > self.y0_m):
             raise ValueError("SoilRegion: needs x1_m > x0_m and y1_m > y0_m")
 
     def contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        return (x >= self.x0_m) & (x < self.x1_m) & (y >= self.y0_m) & (y < self.y1_m)
+        cx, cy = 0.5 * (self.x0_m + self.x1_m), 0.5 * (self.y0_m + self.y1_m)
+        c, s = np.cos(self.angle_rad), np.sin(self.angle_rad)
+        u = cx + c * (x - cx) + s * (y - cy)  # the point in the rectangle's own axes
+        v = cy - s * (x - cx) + c * (y - cy)
+        return (u >= self.x0_m) & (u < self.x1_m) & (v >= self.y0_m) & (v < self.y1_m)
+
+
+@dataclass(frozen=True)
+class SoilDisc:
+    """A disc [m] of softer soil with extra torque compliance [1/(N m)]."""
+
+    center_x_m: float
+    center_y_m: float
+    radius_m: float
+    compliance_per_nm: float
+
+    def __post_init__(self) -> None:
+        for name in ("center_x_m", "center_y_m", "radius_m", "compliance_per_nm"):
+            if not np.isfinite(getattr(self, name)):
+                raise ValueError(f"SoilDisc: {name} must be finite")
+        if self.radius_m <= 0:
+            raise ValueError("SoilDisc: needs radius_m > 0")
+
+    def contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return np.hypot(x - self.center_x_m, y - self.center_y_m) < self.radius_m
 
 
 @dataclass(frozen=True)
@@ -154,7 +180,7 @@ def kinematic_log(seed: int, truth: KinematicTruth | None = None, *, duration_s:
                   gt_sigma_m: float = 1e-3, gt_sigma_rad: float = 1e-3,
                   kind: str = "diff_drive", wheelbase_m: float = 0.6,
                   torque_slip_per_nm: float | None = None,
-                  soil_regions: tuple[SoilRegion, ...] = (), with_torque: bool = False,
+                  soil_regions: tuple[SoilRegion | SoilDisc, ...] = (), with_torque: bool = False,
                   field_m: float = 8.0) -> Log:
     """One log of the kinematic robot (seeded; nominal geometry ``radius_m``, ``track_m``).
 
@@ -179,8 +205,8 @@ def kinematic_log(seed: int, truth: KinematicTruth | None = None, *, duration_s:
         Front-rear axle distance of the rover [m] (true and nominal).
     torque_slip_per_nm : float, optional
         Torque compliance c = 1/k_s everywhere [1/(N m)] (hidden ``torque_slip``).
-    soil_regions : tuple of SoilRegion
-        Rectangles of extra compliance (hidden soil map).
+    soil_regions : tuple of SoilRegion or SoilDisc
+        Regions of extra compliance (hidden soil map); they add where they overlap.
     with_torque : bool
         Log ``torque_<wheel>`` even without torque slip (a clean log with torque).
     field_m : float

@@ -79,23 +79,30 @@ class Circle:
 
 @dataclass(frozen=True)
 class Rectangle:
-    """Axis-aligned rectangle [x_min_m, x_max_m] x [y_min_m, y_max_m] [m]."""
+    """Rectangle [x_min_m, x_max_m] x [y_min_m, y_max_m] [m], turned by `angle_rad` [rad]
+    (counter-clockwise) about its centre; axis-aligned at the default 0."""
 
     x_min_m: float
     y_min_m: float
     x_max_m: float
     y_max_m: float
+    angle_rad: float = 0.0
 
     def __post_init__(self) -> None:
         if not (self.x_min_m < self.x_max_m and self.y_min_m < self.y_max_m):
             raise ValueError(f"Rectangle needs x_min_m < x_max_m and y_min_m < y_max_m, got {self}")
+        if not math.isfinite(self.angle_rad):
+            raise ValueError(f"Rectangle angle_rad={self.angle_rad!r} must be finite")
 
     def signed_distance_m(self, x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
         """Euclidean distance to the rectangle's boundary [m], negative inside."""
-        qx = np.abs(np.subtract(x_m, 0.5 * (self.x_min_m + self.x_max_m))) \
-            - 0.5 * (self.x_max_m - self.x_min_m)
-        qy = np.abs(np.subtract(y_m, 0.5 * (self.y_min_m + self.y_max_m))) \
-            - 0.5 * (self.y_max_m - self.y_min_m)
+        dx = np.subtract(x_m, 0.5 * (self.x_min_m + self.x_max_m))
+        dy = np.subtract(y_m, 0.5 * (self.y_min_m + self.y_max_m))
+        if self.angle_rad != 0.0:  # into the rectangle's own axes
+            c, s = math.cos(self.angle_rad), math.sin(self.angle_rad)
+            dx, dy = c * dx + s * dy, -s * dx + c * dy
+        qx = np.abs(dx) - 0.5 * (self.x_max_m - self.x_min_m)
+        qy = np.abs(dy) - 0.5 * (self.y_max_m - self.y_min_m)
         outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
         return outside + np.minimum(np.maximum(qx, qy), 0.0)
 

@@ -1,6 +1,7 @@
 """Issue 14 items 3-4: every vehicle kind is diagnosed (rover4ws included; torque slip on
-skid-steer and rover logs), and soil that varies in space is mapped as regions of a grid that
-the simulation takes as a ``PatchSoilMap``. Logs from the kinematic generator."""
+skid-steer and rover logs), and soil that varies in space is mapped as regions with
+continuous edges (unions of rectangles) that the simulation takes as a ``PatchSoilMap``.
+Logs from the kinematic generator."""
 
 from __future__ import annotations
 
@@ -117,6 +118,24 @@ def test_soil_regions_are_mapped_and_the_map_cuts_the_held_out_error(field_probl
         near = np.isclose(true, level)  # cells are cut by the regions' edges, and a cell of
         assert abs(np.median(fitted[near]) - level) < 0.35 * level  # the 0.006 region may
         # fall in the 0.008 one's region (at most 3 regions, chosen on held-out data)
+
+
+def test_a_maps_patches_hold_its_compliance_everywhere_overlaps_included():
+    from slipenv.diagnose.effects.soil_map import _params
+    from slipenv.diagnose.regions import Layout
+
+    # region 0 an L of two overlapping rectangles (a union), region 1 across both (adds)
+    layout = Layout(((-3.0, -3.0, 1.0, -1.0), (-3.0, -3.0, -1.5, 2.0), (-2.0, -2.0, 2.5, 0.5)),
+                    (0, 0, 1))
+    m = _params(0.4, layout, np.array([0.004, 0.003]))
+    patches = m.patches()
+    xy = np.random.default_rng(5).uniform(-5.0, 5.0, (4000, 2))
+    painted = np.zeros(len(xy))
+    for rect, level in patches:  # PatchSoilMap: later patches on top
+        inside = rect.signed_distance_m(xy[:, 0], xy[:, 1]) < 0
+        painted[inside] = level
+    np.testing.assert_allclose(painted, m.compliance_at(xy), atol=1e-15)
+    assert set(np.round(m.compliance_at(xy), 6)) == {0.0, 0.004, 0.003, 0.007}
 
 
 def test_the_fitted_map_is_applied_to_the_simulation_as_patches(field_problem):

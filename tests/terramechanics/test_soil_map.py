@@ -44,9 +44,25 @@ def test_circle_and_rectangle_signed_distances():
     np.testing.assert_allclose(d, [-1.0, -0.5, 0.0, 5.0, 0.5], rtol=1e-15)
 
 
+def test_a_turned_rectangle_measures_distance_in_its_own_axes():
+    # 4 m x 2 m centred at (2, 1), turned a quarter turn: 2 m along x, 4 m along y
+    r = Rectangle(0.0, 0.0, 4.0, 2.0, angle_rad=np.pi / 2)
+    d = r.signed_distance_m(np.array([2.0, 2.0, 3.0, 3.5, 2.0]),
+                            np.array([1.0, 2.9, 1.0, 1.0, 3.5]))
+    np.testing.assert_allclose(d, [-1.0, -0.1, 0.0, 0.5, 0.5], atol=1e-12)
+    turned = Rectangle(0.0, 0.0, 4.0, 2.0, angle_rad=np.pi / 6)
+    x, y = np.random.default_rng(0).uniform(-3.0, 7.0, (2, 200))
+    c, s = np.cos(np.pi / 6), np.sin(np.pi / 6)  # the same points in the rectangle's axes
+    u, v = 2.0 + c * (x - 2.0) + s * (y - 1.0), 1.0 - s * (x - 2.0) + c * (y - 1.0)
+    np.testing.assert_allclose(turned.signed_distance_m(x, y),
+                               Rectangle(0.0, 0.0, 4.0, 2.0).signed_distance_m(u, v), atol=1e-12)
+
+
 def test_degenerate_rectangle_and_circle_raise():
     with pytest.raises(ValueError, match="x_min_m < x_max_m"):
         Rectangle(1.0, 0.0, 1.0, 2.0)
+    with pytest.raises(ValueError, match="angle_rad=nan"):
+        Rectangle(0.0, 0.0, 1.0, 2.0, angle_rad=float("nan"))
     with pytest.raises(ValueError, match="radius_m=0.0"):
         Circle(0.0, 0.0, 0.0)
 

@@ -319,7 +319,7 @@ class Effect:
     optional : dict
         Contract names that may be omitted from a model, with the value that switches them off.
     fixed : tuple of str
-        Layout fields (a map's grid and cells' regions): chosen by ``start`` (a model-order
+        Layout fields (a map's frame and its regions' corners): chosen by ``start`` (a model-order
         choice on the data), then held while the other fields are fitted; their standard
         error is 0.
     calibration : bool
@@ -339,7 +339,7 @@ class Effect:
         model on every block replayed whole, is for slow drifts, and is the costliest step.
     condense : callable, optional
         ``{contract name: [value, se]} -> (kept, lines)``: how a report shows its parameters
-        when one line each would bury them (a map's cells as a grid of region numbers):
+        when one line each would bury them (a map's regions, one line each, not four corners):
         ``kept`` are listed one per line, ``lines`` follow them. None: every one listed.
     """
 

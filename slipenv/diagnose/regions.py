@@ -1,0 +1,325 @@
+"""Regions of softer soil with continuous edges, fitted on a per-interval quadratic.
+
+A soil map's regions are rectangles in a map frame (turned by the route's main direction):
+each edge may sit anywhere, not on a grid, so a region follows a field's edge instead of
+mixing the soft end of a lane with the firm turn beyond it in one cell.
+
+**The quadratic.** Torque slip s = c(x, y) T (Lindgren Eq. 24) enters the replay per interval
+and the segments are replayed apart, so to first order the training cost of any per-interval
+compliance C (S segments, L-1 intervals) is
+
+    Σ_s |r0_s + D_s C_s|² = rr_s + 2 b_s·C_s + C_sᵀ G_s C_s,   G_s = D_sᵀ D_s, b_s = D_sᵀ r0_s,
+
+with D_s the residuals' sensitivity to interval j of segment s: one finite difference per
+interval index j, all segments at once (:meth:`Quadratic.from_residuals`, L - 1 replays).
+Any map is then scored without replaying: its compliance at the intervals' midpoints goes
+into the quadratic.
+
+**The search.** A region is a union of rectangles (an L-shaped field is two; a disc a few);
+regions add where they overlap. For regions U_r (indicators over the intervals) and their
+compliances c, the cost is rr + 2 hᵀc + cᵀ A c with A_rl = Σ U_rᵀ G U_l and h_r = Σ bᵀ U_r,
+minimised by c = -A⁻¹h. Moving one edge of one rectangle adds or removes intervals in the
+order of their coordinate, so A and h for *every* position of that edge come from cumulative
+sums over that order (:func:`scan_edge`, exact, one pass); the edge goes to the best, halfway
+between the data points on either side (the cut with the widest margin). Coordinate descent
+over the edges, each new rectangle (a new region or part of one) seeded at the best cell of a
+coarse grid, gives layouts of 1, 2, … rectangles; how many is chosen on held-out data by the
+caller.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+_SEED_CELLS = 8  # cells per side of the coarse grid a new region is seeded from
+_SEEDS = 3  # best seed cells each descended from
+_SWEEPS = 8  # most passes of coordinate descent over the edges
+_TOL = 1e-9  # relative cost fall that counts as progress
+
+Rect = tuple[float, float, float, float]  # (u0, v0, u1, v1) in the map frame [m]
+
+
+@dataclass(frozen=True)
+class Quadratic:
+    """First-order training cost of a per-interval torque compliance (module doc).
+
+    Attributes
+    ----------
+    G : ndarray (S, L-1, L-1)
+    b : ndarray (S, L-1)
+    rr : ndarray (S,)
+        Each segment's cost at C = 0.
+    uv : ndarray (S, L-1, 2)
+        Interval midpoints in the map frame [m].
+    """
+
+    G: np.ndarray
+    b: np.ndarray
+    rr: np.ndarray
+    uv: np.ndarray
+    _masks: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    @classmethod
+    def from_residuals(cls, residuals, rows: np.ndarray, n_intervals: int, scale: float,
+                       uv: np.ndarray) -> Quadratic:
+        """``residuals(j, c)``: the flat training residuals with compliance ``c`` on interval
+        ``j`` of every segment (``c = 0``: none); ``rows``: the segment of each residual."""
+        r0 = residuals(0, 0.0)
+        d = np.column_stack([(residuals(j, scale) - r0) / scale for j in range(n_intervals)])
+        s_count = uv.shape[0]
+        g = np.zeros((s_count, n_intervals, n_intervals))
+        b = np.zeros((s_count, n_intervals))
+        rr = np.zeros(s_count)
+        order = np.argsort(rows, kind="stable")
+        starts = np.searchsorted(rows[order], np.arange(s_count + 1))
+        for s in range(s_count):
+            m = order[starts[s]:starts[s + 1]]
+            g[s], b[s], rr[s] = d[m].T @ d[m], d[m].T @ r0[m], r0[m] @ r0[m]
+        return cls(g, b, rr, uv)
+
+    def inside(self, rect: Rect) -> np.ndarray:
+        """:func:`inside` of the midpoints, remembered (a search asks for the same rectangles
+        again and again)."""
+        found = self._masks.get(rect)
+        if found is None:
+            if len(self._masks) > 4096:
+                self._masks.clear()
+            found = self._masks[rect] = inside(self.uv, rect)
+        return found
+
+    def take(self, index: np.ndarray) -> Quadratic:
+        return Quadratic(self.G[index], self.b[index], self.rr[index], self.uv[index])
+
+    def segment_costs(self, compliance: np.ndarray) -> np.ndarray:
+        """Each segment's cost (S,) for a per-interval compliance (S, L-1)."""
+        c = compliance
+        return self.rr + 2 * np.einsum("sj,sj->s", self.b, c) + \
+            np.einsum("sj,sjk,sk->s", c, self.G, c)
+
+
+def inside(uv: np.ndarray, rect: Rect) -> np.ndarray:
+    """Indicator (float) of the points ``uv`` (…, 2) in ``rect``: u0 <= u < u1, v0 <= v < v1."""
+    u, v = uv[..., 0], uv[..., 1]
+    return ((u >= rect[0]) & (u < rect[2]) & (v >= rect[1]) & (v < rect[3])).astype(float)
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Rectangles (u0, v0, u1, v1) in the map frame [m] and the region each belongs to; a
+    region is the union of its rectangles, regions add where they overlap."""
+
+    rects: tuple[Rect, ...] = ()
+    labels: tuple[int, ...] = ()
+
+    @property
+    def count(self) -> int:
+        """Number of regions."""
+        return max(self.labels) + 1 if self.labels else 0
+
+    def masks(self, where: np.ndarray | Quadratic, skip: int | None = None) -> np.ndarray:
+        """Indicator (regions, …) of each region at points ``uv`` (…, 2), or at a quadratic's
+        midpoints (rectangle ``skip`` left out)."""
+        if isinstance(where, Quadratic):
+            shape, mask = where.uv.shape[:-1], where.inside
+        else:
+            shape, mask = where.shape[:-1], lambda rect: inside(where, rect)
+        out = np.zeros((self.count, *shape))
+        for k, (rect, label) in enumerate(zip(self.rects, self.labels, strict=True)):
+            if k != skip:
+                out[label] = np.maximum(out[label], mask(rect))
+        return out
+
+    def with_rect(self, k: int, rect: Rect) -> Layout:
+        rects = list(self.rects)
+        rects[k] = rect
+        return Layout(tuple(rects), self.labels)
+
+    def added(self, rect: Rect, label: int) -> Layout:
+        return Layout((*self.rects, rect), (*self.labels, label))
+
+
+def compliance(uv: np.ndarray, layout: Layout, levels: np.ndarray) -> np.ndarray:
+    """Compliance at ``uv``: the sum of the levels of the regions holding each point."""
+    return np.tensordot(np.asarray(levels, dtype=float), layout.masks(uv), axes=1) \
+        if layout.rects else np.zeros(uv.shape[:-1])
+
+
+def solve(q: Quadratic, layout: Layout) -> tuple[np.ndarray, float]:
+    """Best levels of the regions of ``layout`` and the total cost they leave."""
+    if not layout.rects:
+        return np.zeros(0), float(q.rr.sum())
+    masks = layout.masks(q)
+    gm = np.einsum("sjk,rsk->rsj", q.G, masks)
+    a = np.einsum("rsj,lsj->rl", masks, gm)
+    h = np.einsum("sj,rsj->r", q.b, masks)
+    c = -np.linalg.solve(a + _ridge(a) * np.eye(len(a)), h)
+    return c, float(q.rr.sum() + h @ c)
+
+
+def _ridge(a: np.ndarray) -> float:
+    return 1e-12 * max(float(np.trace(a)) / max(len(a), 1), 1e-300)
+
+
+def scan_edge(q: Quadratic, layout: Layout, k: int, edge: int, limits: Rect
+              ) -> tuple[Layout, np.ndarray, float] | None:
+    """The best position of ``edge`` (0: u0, 1: v0, 2: u1, 3: v1) of rectangle ``k``, the
+    others held, over every cut between data points (module doc): (layout, levels, cost),
+    or None when no cut leaves every level positive (softer ground only)."""
+    axis, lower = edge % 2, edge < 2
+    rect, region = layout.rects[k], layout.labels[k]
+    masks = layout.masks(q, skip=k)  # region's other rectangles, and the other regions
+    held = list(rect)
+    held[edge] = limits[edge]  # the scanned edge open to the map's limit
+    eligible = (inside(q.uv, tuple(held)) > 0) & (masks[region] == 0)  # type: ignore[arg-type]
+    coord = q.uv[..., axis][eligible]
+    n = coord.size
+    if n == 0:
+        return None
+    order = np.argsort(-coord if lower else coord, kind="stable")
+    where = np.nonzero(eligible)
+    rank = np.full(eligible.shape, -1)
+    rank[where[0][order], where[1][order]] = np.arange(n)
+    # the region's intervals after the first m+1 are added: every pair (i, j) of a segment
+    # counts from max(rank_i, rank_j) on
+    seg_ok = np.flatnonzero(eligible.any(axis=1))
+    r = rank[seg_ok]
+    pair = np.maximum(r[:, :, None], r[:, None, :])
+    both = (r[:, :, None] >= 0) & (r[:, None, :] >= 0)
+    added = np.cumsum(np.bincount(pair[both], weights=q.G[seg_ok][both], minlength=n))
+    gm = np.einsum("sjk,rsk->rsj", q.G, masks)
+    a0 = np.einsum("rsj,lsj->rl", masks, gm)  # every region without rectangle k
+    h0 = np.einsum("sj,rsj->r", q.b, masks)
+    grow_h = np.cumsum(q.b[eligible][order])
+    grow_a = np.cumsum(gm[:, eligible][:, order], axis=1).T  # (n, regions)
+    a = np.broadcast_to(a0, (n, *a0.shape)).copy()
+    a[:, region, :] += grow_a
+    a[:, :, region] += grow_a
+    a[:, region, region] += added  # (grow_a counted the region's own row twice: 2 M_f·G·add)
+    h = np.broadcast_to(h0, (n, len(h0))).copy()
+    h[:, region] += grow_h
+    try:
+        c = -np.linalg.solve(a + _ridge(np.mean(a, axis=0)) * np.eye(len(h0)),
+                             h[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        return None
+    cost = q.rr.sum() + np.einsum("nk,nk->n", h, c)
+    sorted_coord = coord[order]
+    # a cut must fall between two distinct coordinates (or beyond the last)
+    valid = np.all(c > 0, axis=1) & np.concatenate([sorted_coord[:-1] != sorted_coord[1:],
+                                                    [True]])
+    if not np.any(valid):
+        return None
+    m = int(np.argmin(np.where(valid, cost, np.inf)))
+    out = list(rect)
+    out[edge] = float(0.5 * (sorted_coord[m] + sorted_coord[m + 1]) if m + 1 < n
+                      else limits[edge])
+    return layout.with_rect(k, tuple(out)), c[m], float(cost[m])  # type: ignore[arg-type]
+
+
+def descend(q: Quadratic, layout: Layout, limits: Rect, moving: list[int] | None = None
+            ) -> tuple[Layout, np.ndarray, float]:
+    """Coordinate descent over the edges of rectangles ``moving`` (all by default)."""
+    levels, cost = solve(q, layout)
+    for _ in range(_SWEEPS):
+        before = cost
+        for k in (range(len(layout.rects)) if moving is None else moving):
+            for edge in range(4):
+                found = scan_edge(q, layout, k, edge, limits)
+                if found is not None and found[2] <= cost:
+                    layout, levels, cost = found
+        if cost >= before - _TOL * abs(before):
+            break
+    return layout, levels, cost
+
+
+def limits_of(uv: np.ndarray) -> Rect:
+    """The map frame's limits: the midpoints' extent, padded by 1 %."""
+    pts = uv.reshape(-1, 2)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    pad = 0.01 * np.maximum(hi - lo, 1e-3)
+    return float(lo[0] - pad[0]), float(lo[1] - pad[1]), float(hi[0] + pad[0]), \
+        float(hi[1] + pad[1])
+
+
+def grow(q: Quadratic, limits: Rect, max_rects: int, max_regions: int
+         ) -> list[tuple[Layout, np.ndarray, float]]:
+    """Greedy layouts: for 1 … ``max_rects`` rectangles, a new rectangle — a new region
+    (up to ``max_regions``) or part of one already there — seeded at the coarse-grid cell that
+    lowers the cost most (levels all positive), its edges descended from the best ``_SEEDS``
+    seeds, then every edge polished. Returns (layout, levels, cost) per rectangle count reached
+    (fewer when no rectangle lowers the cost)."""
+    u = np.linspace(limits[0], limits[2], _SEED_CELLS + 1)
+    v = np.linspace(limits[1], limits[3], _SEED_CELLS + 1)
+    cells = [(float(u[i]), float(v[j]), float(u[i + 1]), float(v[j + 1]))
+             for i in range(_SEED_CELLS) for j in range(_SEED_CELLS)]
+    path: list[tuple[Layout, np.ndarray, float]] = []
+    layout = Layout()
+    cost = float(q.rr.sum())
+    for _ in range(max_rects):
+        seeds = _seeds(q, layout, cells, max_regions, cost)
+        if not seeds:
+            break
+        new = len(layout.rects)
+        tries = [descend(q, trial, limits, moving=[new]) for trial in seeds]
+        best = min(tries, key=lambda t: t[2])
+        layout, levels, cost = descend(q, best[0], limits)
+        path.append((layout, levels, cost))
+    return path
+
+
+def _seeds(q: Quadratic, layout: Layout, cells: list[Rect], max_regions: int,
+           cost: float) -> list[Layout]:
+    """The ``_SEEDS`` best layouts of one more rectangle, a cell of ``cells`` (a partition
+    of the map) as a new region or added to one, that lower ``cost`` with every level > 0.
+    All cells of a label are scored at once: the cell indicators are the columns of O."""
+    onehot = np.stack([q.inside(cell) for cell in cells], axis=-1)  # (S, L-1, cells)
+    masks = layout.masks(q)
+    count = layout.count
+    gm = np.einsum("sjk,rsk->rsj", q.G, masks)
+    a0 = np.einsum("rsj,lsj->rl", masks, gm)
+    h0 = np.einsum("sj,rsj->r", q.b, masks)
+    found = []
+    for label in range(min(count + 1, max_regions)):
+        size = max(count, label + 1)
+        o = onehot if label == count else onehot * (1.0 - masks[label])[..., None]
+        go = np.einsum("sjk,skc->sjc", q.G, o)
+        cross = np.einsum("rsj,sjc->cr", masks, go)  # (cells, regions)
+        a = np.zeros((len(cells), size, size))
+        a[:, :count, :count] = a0
+        a[:, label, :count] += cross
+        a[:, :count, label] += cross
+        a[:, label, label] += np.einsum("sjc,sjc->c", o, go)
+        h = np.zeros((len(cells), size))
+        h[:, :count] = h0
+        h[:, label] += np.einsum("sj,sjc->c", q.b, o)
+        useful = np.einsum("sjc->c", o) > 0
+        ridge = _ridge(np.mean(a, axis=0)) * np.eye(size)
+        c = -np.linalg.solve(a + ridge, h[..., None])[..., 0]
+        total = q.rr.sum() + np.einsum("nk,nk->n", h, c)
+        ok = useful & np.all(c > 0, axis=1) & (total < cost)
+        found += [(float(total[i]), layout.added(cells[i], label)) for i in np.flatnonzero(ok)]
+    found.sort(key=lambda f: f[0])
+    return [trial for _, trial in found[:_SEEDS]]
+
+
+def main_direction(uv: np.ndarray, moving: np.ndarray) -> float:
+    """The route's main direction modulo 90° [rad]: the travel-weighted four-fold circular
+    mean of the headings between consecutive midpoints (lanes of a field sweep, or the sides of
+    a square), so that rectangles follow the way the ground was worked."""
+    step = np.diff(uv, axis=1)
+    ok = moving[:, 1:] & moving[:, :-1]
+    length = np.hypot(step[..., 0], step[..., 1])[ok]
+    heading = np.arctan2(step[..., 1], step[..., 0])[ok]
+    if length.sum() <= 0:
+        return 0.0
+    z = np.sum(length * np.exp(4j * heading))
+    return float(np.angle(z) / 4.0) if abs(z) > 1e-9 * length.sum() else 0.0
+
+
+def to_map(pos: np.ndarray, angle_rad: float) -> np.ndarray:
+    """World positions (…, 2) [m] in the map frame turned by ``angle_rad``."""
+    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    return np.stack([c * pos[..., 0] + s * pos[..., 1], -s * pos[..., 0] + c * pos[..., 1]],
+                    axis=-1)
