@@ -174,3 +174,25 @@ def dead_reckoning(path: Path, logs: list, fitted) -> Path:
     axes[1].set_ylabel("heading error [°] (red nominal, green calibrated)")
     axes[1].axhline(0.0, color="k", lw=0.5)
     return _save(fig, path)
+
+
+def soil(path: Path, problem: Problem, fitted) -> Path:
+    """Where the fitted model softens the ground: the logged route coloured by the torque
+    compliance c = s / T [1/(N m)] the model ``fitted`` (a ``fit.Fit``) gives each interval,
+    mean over the wheels (Lindgren Eq. 24)."""
+    seg = problem.seg
+    slip = replay.slips(seg, fitted.params)
+    torque = seg.torque if seg.torque is not None else np.zeros_like(slip)
+    ok = np.abs(torque) > 1e-9
+    c = np.divide(slip, torque, out=np.zeros_like(slip), where=ok).sum(axis=-1) / \
+        np.maximum(ok.sum(axis=-1), 1)
+    moving = ok.any(axis=-1)
+    fig, ax = plt.subplots(figsize=(7, 6))
+    dots = ax.scatter(seg.pos[..., 0][moving], seg.pos[..., 1][moving], c=c[moving], s=4,
+                      cmap="viridis")
+    fig.colorbar(dots, ax=ax, label="fitted torque compliance c = s/T [1/(N m)]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(f"where {'+'.join(fitted.effects)} softens the ground along the route")
+    return _save(fig, path)

@@ -243,13 +243,14 @@ def limits_of(uv: np.ndarray) -> Rect:
         float(hi[1] + pad[1])
 
 
-def grow(q: Quadratic, limits: Rect, max_rects: int, max_regions: int
+def grow(q: Quadratic, limits: Rect, max_rects: int, max_regions: int, quick: bool = False
          ) -> list[tuple[Layout, np.ndarray, float]]:
     """Greedy layouts: for 1 … ``max_rects`` rectangles, a new rectangle — a new region
     (up to ``max_regions``) or part of one already there — seeded at the coarse-grid cell that
     lowers the cost most (levels all positive), its edges descended from the best ``_SEEDS``
-    seeds, then every edge polished. Returns (layout, levels, cost) per rectangle count reached
-    (fewer when no rectangle lowers the cost)."""
+    seeds, then every edge polished (``quick``: the best seed only, no polish — a cheaper
+    score of a map frame). Returns (layout, levels, cost) per rectangle count reached (fewer
+    when no rectangle lowers the cost)."""
     u = np.linspace(limits[0], limits[2], _SEED_CELLS + 1)
     v = np.linspace(limits[1], limits[3], _SEED_CELLS + 1)
     cells = [(float(u[i]), float(v[j]), float(u[i + 1]), float(v[j + 1]))
@@ -258,13 +259,14 @@ def grow(q: Quadratic, limits: Rect, max_rects: int, max_regions: int
     layout = Layout()
     cost = float(q.rr.sum())
     for _ in range(max_rects):
-        seeds = _seeds(q, layout, cells, max_regions, cost)
+        seeds = _seeds(q, layout, cells, max_regions, cost)[:1 if quick else _SEEDS]
         if not seeds:
             break
         new = len(layout.rects)
         tries = [descend(q, trial, limits, moving=[new]) for trial in seeds]
-        best = min(tries, key=lambda t: t[2])
-        layout, levels, cost = descend(q, best[0], limits)
+        layout, levels, cost = min(tries, key=lambda t: t[2])
+        if not quick:
+            layout, levels, cost = descend(q, layout, limits)
         path.append((layout, levels, cost))
     return path
 

@@ -4,7 +4,8 @@ The human report is a folder with ``report.md`` (read it first: the cause, its p
 held-out gain, the candidates) and plots: ``overlay.png`` (trajectory: logged, nominal replay,
 extended replay), ``residuals_time.png`` (held-out errors over time), ``regressors.png``
 (per-window residuals against torque, yaw rate, roll, pitch, speed, position), ``candidates.png``
-(held-out error of every effect) and, when the PyBullet replay ran, ``pybullet.png``.
+(held-out error of every effect), for a soil patch or map ``soil.png`` (the route coloured by
+the fitted compliance) and, when the PyBullet replay ran, ``pybullet.png``.
 """
 
 from __future__ import annotations
@@ -285,6 +286,9 @@ def write_human_report(folder: str | Path, report: dict, sel: Selection, problem
     if logs and "pose" in sel.fits and sel.fits["pose"].effects:
         figs["dead_reckoning"] = plots.dead_reckoning(folder / "dead_reckoning.png", logs,
                                                       sel.fits["pose"])
+    fitted = sel.fits.get("pose")
+    if fitted is not None and any(effect(name).local for name in fitted.effects):
+        figs["soil"] = plots.soil(folder / "soil.png", problem, fitted)
     if sim_overlay:
         figs["pybullet"] = plots.pybullet(folder / "pybullet.png", sim_overlay)
     (folder / "report.md").write_text(markdown(report, figs, sim_overlay), encoding="utf-8")
@@ -369,6 +373,8 @@ def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
                 "candidates": "held-out error of every effect relative to the nominal model",
                 "dead_reckoning": "whole-log dead reckoning from the first logged pose, nominal "
                                   "and with the fitted model (fitted on the whole log)",
+                "soil": "where the fitted model softens the ground: the route coloured by "
+                        "the torque compliance it gives each interval",
                 "pybullet": "PyBullet replay (physics, logged wheel motion) before/after"}
     lines += [f"- `{p.name}` — {captions[k]}" for k, p in figs.items()]
     if sim:

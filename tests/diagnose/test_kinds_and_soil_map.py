@@ -15,7 +15,7 @@ from slipenv.diagnose.cli import diagnose
 from slipenv.diagnose.effects import effect
 from slipenv.diagnose.extension import apply_model
 from slipenv.diagnose.fit import Problem, fit
-from slipenv.diagnose.kinematic import KinematicTruth, SoilRegion, kinematic_log
+from slipenv.diagnose.kinematic import KinematicTruth, SoilDisc, SoilRegion, kinematic_log
 from slipenv.diagnose.replay import build_segments, simulate
 from slipenv.diagnose.select import cross_validate, make_folds
 from slipenv.envs.factory import make_soil_map
@@ -103,21 +103,59 @@ def test_soil_regions_are_mapped_and_the_map_cuts_the_held_out_error(field_probl
     single = _quiet(cross_validate, problem, ("torque_slip",), folds)
     mapped = _quiet(cross_validate, problem, ("soil_map",), folds)
     ratio = mapped.errors.sum() / base.errors.sum()
-    assert ratio < 0.6, ratio  # the map predicts segments it never saw
-    assert mapped.errors.sum() < 0.6 * single.errors.sum()  # one stiffness everywhere cannot
+    assert ratio < 0.2, ratio  # the map predicts segments it never saw (0.08 measured)
+    assert mapped.errors.sum() < 0.3 * single.errors.sum()  # one stiffness everywhere cannot
     f = _quiet(fit, problem, ("soil_map",))
     m = f.params["soil_map"]
-    assert int(round(m.regions)) >= 2
+    assert m.regions >= 2
     # where the route went, the map's stiffness matches the truth's soft/firm split
     pos = problem.seg.pos[np.abs(problem.seg.dphi).sum(axis=-1) > 0]
     fitted, true = m.compliance_at(pos), _truth_compliance(pos[:, 0], pos[:, 1])
     soft = true > 0
     agree = np.mean((fitted > 0.5 * REGIONS[1].compliance_per_nm) == soft)
-    assert agree > 0.8, agree
-    for level in (0.006, 0.008):  # each soft region's compliance within 35 %: the grid's
-        near = np.isclose(true, level)  # cells are cut by the regions' edges, and a cell of
-        assert abs(np.median(fitted[near]) - level) < 0.35 * level  # the 0.006 region may
-        # fall in the 0.008 one's region (at most 3 regions, chosen on held-out data)
+    assert agree > 0.95, agree
+    for level in (0.006, 0.008):  # each soft region's compliance within 5 % (0.5 % measured):
+        near = np.isclose(true, level)  # the regions' edges follow the fields' edges
+        assert abs(np.median(fitted[near]) - level) < 0.05 * level
+
+
+def test_a_field_log_is_named_soil_map_and_its_report_shows_where_the_ground_is_soft(
+        tmp_path):
+    from slipenv.diagnose.report import write_human_report
+
+    log = kinematic_log(3, None, duration_s=180.0, route="field", soil_regions=REGIONS)
+    report, (sel, problem) = _quiet(diagnose, [log], "<field>")
+    assert report["cause"] == "soil_map", report["candidates"]
+    folder = write_human_report(tmp_path / "rep", report, sel, problem, logs=[log])
+    assert (folder / "soil.png").stat().st_size > 10_000
+    text = (folder / "report.md").read_text()
+    assert "soil map: " in text and "map_rect" not in text
+
+
+TURNED = (SoilRegion(-3.5, -3.0, -0.5, -0.5, 0.008, angle_rad=0.52),  # fields 30 deg to
+          SoilRegion(0.5, 0.5, 3.5, 3.0, 0.006, angle_rad=0.52))  # the lanes
+DISC_AND_L = (SoilDisc(-1.5, 1.5, 1.8, 0.008),  # a disc, and an L-shaped field of one soil
+              SoilRegion(0.5, -3.5, 3.5, -1.5, 0.006), SoilRegion(2.0, -1.5, 3.5, 1.0, 0.006))
+
+
+@pytest.mark.parametrize("layout", [TURNED, DISC_AND_L], ids=["turned", "disc_and_l"])
+def test_soil_regions_of_other_shapes_are_mapped(layout):
+    log = kinematic_log(3, None, duration_s=180.0, route="field", soil_regions=layout)
+    problem = Problem.from_segments(build_segments([log]))
+    folds = make_folds(problem.seg)
+    base = _quiet(cross_validate, problem, (), folds)
+    mapped = _quiet(cross_validate, problem, ("soil_map",), folds)
+    ratio = mapped.errors.sum() / base.errors.sum()
+    assert ratio < 0.35, ratio  # 0.04 (turned) and 0.17 (disc and L) measured
+    m = _quiet(fit, problem, ("soil_map",)).params["soil_map"]
+    pos = problem.seg.pos[np.abs(problem.seg.dphi).sum(axis=-1) > 0]
+    true = sum(np.where(r.contains(pos[:, 0], pos[:, 1]), r.compliance_per_nm, 0.0)
+               for r in layout)
+    agree = np.mean((m.compliance_at(pos) > 0.003) == (true > 0))
+    assert agree > 0.9, agree  # 0.99 and 0.96 measured
+    if layout is TURNED:  # the map's frame turns with the fields (modulo a quarter turn)
+        off = (m.angle_rad - 0.52 + np.pi / 4) % (np.pi / 2) - np.pi / 4
+        assert abs(off) < np.radians(3.0), np.degrees(m.angle_rad)
 
 
 def test_a_maps_patches_hold_its_compliance_everywhere_overlaps_included():

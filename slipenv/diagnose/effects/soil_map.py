@@ -12,14 +12,15 @@ Fitting (:func:`start`, ``slipenv.diagnose.regions``): the residuals' sensitivit
 compliance of each run of a few intervals gives a quadratic in which any map is scored
 without replaying; the rectangles' edges are placed anywhere (between data points, not on a
 grid: a grid's cell at a field's edge mixes the soft lane ends with the firm turns beyond
-them), greedily one rectangle at a time. The frame's angle is the one whose map fits the
-training data best (every ``_ANGLE_STEP`` over a quarter turn and the route's main
-direction, then the step halved twice around the best); the number of rectangles is chosen
-on held-out data: maps found on the other training segments are scored on each of
-``_K_FOLDS`` interleaved folds, and the fewest within ``K_TOLERANCE`` of the best held-out
-error win. The full fit then refines the compliances with the layout held (the layout is a
-model-order choice, not a fitted number). Simulation: a ``PatchSoilMap`` of turned
-rectangles (the cells the edges draw, each with its summed compliance) over the base soil.
+them), greedily one rectangle at a time. The frame's angle is the one whose map (a quicker
+search: one seed per rectangle, no polish) fits the training data best (every
+``_ANGLE_STEP`` over a quarter turn and the route's main direction, then the step halved
+twice around the best); the number of rectangles is chosen on held-out data: maps found on
+the other training segments are scored on each of ``_K_FOLDS`` interleaved folds, and the
+fewest within ``K_TOLERANCE`` of the best held-out error win. The full fit then refines the
+compliances with the layout held (the layout is a model-order choice, not a fitted number).
+Simulation: a ``PatchSoilMap`` of turned rectangles (the cells the edges draw, each with its
+summed compliance) over the base soil.
 
 Contract names: ``map_angle_rad``, ``map_rects`` (n), ``map_rect<k>_u0_m`` … ``_v1_m`` and
 ``map_rect<k>_region`` (rectangle k's corners in the map frame, u along the angle and v
@@ -209,8 +210,8 @@ def start(ctx: StartContext) -> list:
         q = dataclasses.replace(world, uv=regions.to_map(centres, angle))
         return q, regions.limits_of(q.uv)
 
-    def score(angle: float) -> float:  # the training cost of the frame's best map
-        path = regions.grow(*frame(angle), MAX_RECTS, MAX_REGIONS)
+    def score(angle: float) -> float:  # the training cost of the frame's map (quick search)
+        path = regions.grow(*frame(angle), MAX_RECTS, MAX_REGIONS, quick=True)
         return path[-1][2] if path else np.inf
 
     moving = np.abs(seg.dphi).sum(axis=-1) > 0
