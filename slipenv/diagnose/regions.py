@@ -1,8 +1,9 @@
 """Regions of softer soil with continuous edges, fitted on a per-interval quadratic.
 
-A soil map's regions are rectangles in a map frame (turned by the route's main direction):
-each edge may sit anywhere, not on a grid, so a region follows a field's edge instead of
-mixing the soft end of a lane with the firm turn beyond it in one cell.
+A soil map's regions are unions of rectangles in a map frame (turned to fit the ground; the
+caller chooses the angle): each edge may sit anywhere, not on a grid, so a region follows a
+field's edge instead of mixing the soft end of a lane with the firm turn beyond it in one
+cell.
 
 **The quadratic.** Torque slip s = c(x, y) T (Lindgren Eq. 24) enters the replay per interval
 and the segments are replayed apart, so to first order the training cost of any per-interval
@@ -11,9 +12,10 @@ compliance C (S segments, L-1 intervals) is
     Σ_s |r0_s + D_s C_s|² = rr_s + 2 b_s·C_s + C_sᵀ G_s C_s,   G_s = D_sᵀ D_s, b_s = D_sᵀ r0_s,
 
 with D_s the residuals' sensitivity to interval j of segment s: one finite difference per
-interval index j, all segments at once (:meth:`Quadratic.from_residuals`, L - 1 replays).
-Any map is then scored without replaying: its compliance at the intervals' midpoints goes
-into the quadratic.
+interval index j, all segments at once (:meth:`Quadratic.from_residuals`, L - 1 replays; the
+caller may let runs of intervals share a compliance, and pass the runs as "intervals"). Any
+map is then scored without replaying: its compliance at the intervals' midpoints goes into
+the quadratic.
 
 **The search.** A region is a union of rectangles (an L-shaped field is two; a disc a few);
 regions add where they overlap. For regions U_r (indicators over the intervals) and their
