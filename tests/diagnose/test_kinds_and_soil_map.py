@@ -132,6 +132,18 @@ def test_a_field_log_is_named_soil_map_and_its_report_shows_where_the_ground_is_
     assert "soil map: " in text and "map_rect" not in text
 
 
+def test_the_generators_turned_fields_and_discs_hold_the_points_they_should():
+    x, y = np.random.default_rng(2).uniform(-4.0, 4.0, (2, 2000))
+    # a 4 x 2 m field turned a quarter turn about its centre (1, 0) is 2 x 4 m
+    turned = SoilRegion(-1.0, -1.0, 3.0, 1.0, 0.005, angle_rad=np.pi / 2)
+    upright = SoilRegion(0.0, -2.0, 2.0, 2.0, 0.005)
+    assert np.array_equal(turned.contains(x, y), upright.contains(x, y))
+    disc = SoilDisc(1.0, -1.0, 1.5, 0.005)
+    assert np.array_equal(disc.contains(x, y), np.hypot(x - 1.0, y + 1.0) < 1.5)
+    with pytest.raises(ValueError, match="radius_m > 0"):
+        SoilDisc(0.0, 0.0, 0.0, 0.005)
+
+
 TURNED = (SoilRegion(-3.5, -3.0, -0.5, -0.5, 0.008, angle_rad=0.52),  # fields 30 deg to
           SoilRegion(0.5, 0.5, 3.5, 3.0, 0.006, angle_rad=0.52))  # the lanes
 DISC_AND_L = (SoilDisc(-1.5, 1.5, 1.8, 0.008),  # a disc, and an L-shaped field of one soil
