@@ -39,6 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from slipenv.diagnose.regions import to_map
 from slipenv.logs.log import Log
 from slipenv.logs.meta import LogMeta
 
@@ -70,10 +71,10 @@ class SoilRegion:
             raise ValueError("SoilRegion: needs x1_m > x0_m and y1_m > y0_m")
 
     def contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        cx, cy = 0.5 * (self.x0_m + self.x1_m), 0.5 * (self.y0_m + self.y1_m)
-        c, s = np.cos(self.angle_rad), np.sin(self.angle_rad)
-        u = cx + c * (x - cx) + s * (y - cy)  # the point in the rectangle's own axes
-        v = cy - s * (x - cx) + c * (y - cy)
+        centre = np.array([0.5 * (self.x0_m + self.x1_m), 0.5 * (self.y0_m + self.y1_m)])
+        # the point in the rectangle's own axes
+        u, v = np.moveaxis(to_map(np.stack([x, y], axis=-1) - centre, self.angle_rad)
+                           + centre, -1, 0)
         return (u >= self.x0_m) & (u < self.x1_m) & (v >= self.y0_m) & (v < self.y1_m)
 
 

@@ -148,14 +148,30 @@ def compliance(uv: np.ndarray, layout: Layout, levels: np.ndarray) -> np.ndarray
         if layout.rects else np.zeros(uv.shape[:-1])
 
 
+@dataclass(frozen=True)
+class _Normal:
+    """The regions' indicators U (regions, S, L-1), G U, A = Uᵀ G U and h = bᵀ U."""
+
+    masks: np.ndarray
+    gm: np.ndarray
+    a: np.ndarray
+    h: np.ndarray
+
+    @classmethod
+    def of(cls, q: Quadratic, layout: Layout, skip: int | None = None) -> _Normal:
+        """Of ``layout``'s regions (rectangle ``skip`` left out)."""
+        masks = layout.masks(q, skip=skip)
+        gm = np.einsum("sjk,rsk->rsj", q.G, masks)
+        return cls(masks, gm, np.einsum("rsj,lsj->rl", masks, gm),
+                   np.einsum("sj,rsj->r", q.b, masks))
+
+
 def solve(q: Quadratic, layout: Layout) -> tuple[np.ndarray, float]:
     """Best levels of the regions of ``layout`` and the total cost they leave."""
     if not layout.rects:
         return np.zeros(0), float(q.rr.sum())
-    masks = layout.masks(q)
-    gm = np.einsum("sjk,rsk->rsj", q.G, masks)
-    a = np.einsum("rsj,lsj->rl", masks, gm)
-    h = np.einsum("sj,rsj->r", q.b, masks)
+    normal = _Normal.of(q, layout)
+    a, h = normal.a, normal.h
     c = -np.linalg.solve(a + _ridge(a) * np.eye(len(a)), h)
     return c, float(q.rr.sum() + h @ c)
 
@@ -164,14 +180,17 @@ def _ridge(a: np.ndarray) -> float:
     return 1e-12 * max(float(np.trace(a)) / max(len(a), 1), 1e-300)
 
 
-def scan_edge(q: Quadratic, layout: Layout, k: int, edge: int, limits: Rect
-              ) -> tuple[Layout, np.ndarray, float] | None:
+def scan_edge(q: Quadratic, layout: Layout, k: int, edge: int, limits: Rect,
+              others: _Normal | None = None) -> tuple[Layout, np.ndarray, float] | None:
     """The best position of ``edge`` (0: u0, 1: v0, 2: u1, 3: v1) of rectangle ``k``, the
     others held, over every cut between data points (module doc): (layout, levels, cost),
-    or None when no cut leaves every level positive (softer ground only)."""
+    or None when no cut leaves every level positive (softer ground only). ``others``: the
+    regions without rectangle k (the same for its four edges), computed when not given."""
     axis, lower = edge % 2, edge < 2
     rect, region = layout.rects[k], layout.labels[k]
-    masks = layout.masks(q, skip=k)  # region's other rectangles, and the other regions
+    # region's other rectangles, and the other regions
+    others = _Normal.of(q, layout, skip=k) if others is None else others
+    masks, gm, a0, h0 = others.masks, others.gm, others.a, others.h
     held = list(rect)
     held[edge] = limits[edge]  # the scanned edge open to the map's limit
     eligible = (inside(q.uv, tuple(held)) > 0) & (masks[region] == 0)  # type: ignore[arg-type]
@@ -190,9 +209,6 @@ def scan_edge(q: Quadratic, layout: Layout, k: int, edge: int, limits: Rect
     pair = np.maximum(r[:, :, None], r[:, None, :])
     both = (r[:, :, None] >= 0) & (r[:, None, :] >= 0)
     added = np.cumsum(np.bincount(pair[both], weights=q.G[seg_ok][both], minlength=n))
-    gm = np.einsum("sjk,rsk->rsj", q.G, masks)
-    a0 = np.einsum("rsj,lsj->rl", masks, gm)  # every region without rectangle k
-    h0 = np.einsum("sj,rsj->r", q.b, masks)
     grow_h = np.cumsum(q.b[eligible][order])
     grow_a = np.cumsum(gm[:, eligible][:, order], axis=1).T  # (n, regions)
     a = np.broadcast_to(a0, (n, *a0.shape)).copy()
@@ -227,8 +243,9 @@ def descend(q: Quadratic, layout: Layout, limits: Rect, moving: list[int] | None
     for _ in range(_SWEEPS):
         before = cost
         for k in (range(len(layout.rects)) if moving is None else moving):
+            others = _Normal.of(q, layout, skip=k)  # moving k's edges leaves it as it is
             for edge in range(4):
-                found = scan_edge(q, layout, k, edge, limits)
+                found = scan_edge(q, layout, k, edge, limits, others)
                 if found is not None and found[2] <= cost:
                     layout, levels, cost = found
         if cost >= before - _TOL * abs(before):
@@ -279,11 +296,9 @@ def _seeds(q: Quadratic, layout: Layout, cells: list[Rect], max_regions: int,
     of the map) as a new region or added to one, that lower ``cost`` with every level > 0.
     All cells of a label are scored at once: the cell indicators are the columns of O."""
     onehot = np.stack([q.inside(cell) for cell in cells], axis=-1)  # (S, L-1, cells)
-    masks = layout.masks(q)
+    normal = _Normal.of(q, layout)
+    masks, a0, h0 = normal.masks, normal.a, normal.h
     count = layout.count
-    gm = np.einsum("sjk,rsk->rsj", q.G, masks)
-    a0 = np.einsum("rsj,lsj->rl", masks, gm)
-    h0 = np.einsum("sj,rsj->r", q.b, masks)
     found = []
     for label in range(min(count + 1, max_regions)):
         size = max(count, label + 1)

@@ -104,14 +104,16 @@ class _SoilMapTerm(Term):
         """Number of regions (distinct stiffnesses)."""
         return self.layout().count
 
-    def levels(self) -> np.ndarray:
-        """Compliance of each region [1/(N m)]."""
-        return np.array([getattr(self, name) for name in _LEVELS[:self.regions]])
+    def levels(self, count: int | None = None) -> np.ndarray:
+        """Compliance of each region [1/(N m)] (of the first ``count``: all used)."""
+        count = self.regions if count is None else count
+        return np.array([getattr(self, name) for name in _LEVELS[:count]])
 
     def compliance_at(self, pos: np.ndarray) -> np.ndarray:
         """Compliance c(x, y) [1/(N m)] at world positions ``pos`` (…, 2) [m]."""
         uv = regions.to_map(pos, self.angle_rad)  # type: ignore[attr-defined]
-        return regions.compliance(uv, self.layout(), self.levels())
+        layout = self.layout()
+        return regions.compliance(uv, layout, self.levels(layout.count))
 
     def slip(self, seg: Segments, pos: np.ndarray) -> np.ndarray | None:
         if seg.torque is None:
@@ -123,7 +125,8 @@ class _SoilMapTerm(Term):
         cells of the grid the rectangles' edges draw, each with the summed compliance of the
         regions holding it (cells with none left out)."""
         angle = float(self.angle_rad)  # type: ignore[attr-defined]
-        layout, levels = self.layout(), self.levels()
+        layout = self.layout()
+        levels = self.levels(layout.count)
         us = sorted({r[0] for r in layout.rects} | {r[2] for r in layout.rects})
         vs = sorted({r[1] for r in layout.rects} | {r[3] for r in layout.rects})
         out = []
