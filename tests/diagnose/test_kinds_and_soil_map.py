@@ -144,6 +144,20 @@ def test_the_generators_turned_fields_and_discs_hold_the_points_they_should():
         SoilDisc(0.0, 0.0, 0.0, 0.005)
 
 
+def test_a_hand_written_map_of_one_rectangle_applies_and_a_bad_one_is_named():
+    one = {"map_angle_rad": [0.3, 0.0], "map_rects": [1.0, 0.0], "map_rect0_u0_m": [0.0, 0.0],
+           "map_rect0_v0_m": [-1.0, 0.0], "map_rect0_u1_m": [2.0, 0.0],
+           "map_rect0_v1_m": [1.0, 0.0], "map_rect0_region": [0.0, 0.0],
+           "c_region0_per_nm": [0.01, 0.0]}
+    config = synth.base_config("diff_drive")
+    report = {"format": "slipenv-diagnosis/1", "cause": "soil_map", "also": [],
+              "parameters": one}
+    assert isinstance(apply_model(config, report).soil_map, PatchSoilMap)
+    two = {**one, "map_rects": [2.0, 0.0]}  # a second rectangle promised, none given
+    with pytest.raises(ValueError, match="rectangle 1 needs u1_m > u0_m"):
+        apply_model(config, {**report, "parameters": two})
+
+
 TURNED = (SoilRegion(-3.5, -3.0, -0.5, -0.5, 0.008, angle_rad=0.52),  # fields 30 deg to
           SoilRegion(0.5, 0.5, 3.5, 3.0, 0.006, angle_rad=0.52))  # the lanes
 DISC_AND_L = (SoilDisc(-1.5, 1.5, 1.8, 0.008),  # a disc, and an L-shaped field of one soil

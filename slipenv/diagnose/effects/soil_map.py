@@ -298,4 +298,8 @@ EFFECT = Effect(
               *(Scalar(name, f"c_region{k}_per_nm") for k, name in enumerate(_LEVELS))),
     mechanism="torque slip law", fixed=_FIXED,
     local=True, condense=condense,
+    # a hand-written map may leave out the rectangles and regions it does not use
+    optional={**{f"map_rect{k}_{e}": 0.0 for k in range(1, MAX_RECTS)
+                 for e in (*_EDGES, "region")},
+              **{f"c_region{r}_per_nm": 0.0 for r in range(1, MAX_REGIONS)}},
 )
