@@ -43,7 +43,11 @@ mean diagnosis time.
 rectangles, those of ``tests/diagnose/test_kinds_and_soil_map.py``; two rectangles turned
 30 degrees to the lanes; a disc and an L-shaped field) and prints what each is named, the
 soil map's regions, its held-out error ratio and p on the short segments and its gain on the
-long route.
+long route. ``--soil-kinds`` says under which vehicles: the differential drive crosses every
+layout, the skid-steer vehicle and the rover the tests' two rectangles (every wheel slips by
+its own torque times the compliance under the vehicle).
+
+    python benchmarks/diagnose_hit_rate.py --n 0 --soil 10 --soil-kinds skid_steer,rover4ws
 """
 
 from __future__ import annotations
@@ -56,7 +60,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from slipenv.diagnose.effects import EFFECTS
-from slipenv.diagnose.synth import GENERATED
+from slipenv.diagnose.synth import DRAWN, GENERATED
 from slipenv.diagnose.synth import KINDS as HIDDEN_ON
 
 Z_LIMIT = 3.0  # |estimate - truth| <= 3 standard errors counts as recovered
@@ -79,7 +83,7 @@ def run_one(job: tuple) -> dict:
     t2 = time.perf_counter()
     z: dict[str, float] = {}
     rel: dict[str, float] = {}
-    if sel.cause == effect and effect != "none":
+    if sel.cause == effect and effect != "none" and EFFECTS[effect].hiding.compare:
         rep = {}
         for fit in sel.fits.values():
             rep.update(fit.report(seg))
@@ -288,22 +292,23 @@ def _soil_regions(layout: str) -> tuple:
                  for r in SOIL_LAYOUTS[layout])
 
 
-def soil_one(case: tuple[str, int]) -> dict:
-    """Diagnose one field log of a soil layout; the cause and the map's scores."""
+def soil_one(case: tuple[str, int, str]) -> dict:
+    """Diagnose one field log of a soil layout (``(layout, seed, vehicle kind)``); the cause
+    and the map's scores."""
     from slipenv.diagnose import replay
     from slipenv.diagnose.fit import Problem
     from slipenv.diagnose.kinematic import kinematic_log
     from slipenv.diagnose.select import select
 
-    layout, seed = case
+    layout, seed, kind = case
     log = kinematic_log(seed, None, duration_s=180.0, route="field",
-                        soil_regions=_soil_regions(layout))
+                        soil_regions=_soil_regions(layout), kind=kind)
     seg = replay.build_segments([log])
     start = time.perf_counter()
     sel = select(Problem.from_segments(seg), logs=[log])
     m = next(c for c in sel.candidates if c.name == "soil_map")
     final = sel.fits.get(m.channel)  # the named model, when the map is in it
-    return {"layout": layout, "seed": seed, "cause": sel.cause, "also": sel.also,
+    return {"layout": layout, "kind": kind, "seed": seed, "cause": sel.cause, "also": sel.also,
             "ratio": m.error_ratio, "p": m.p_value,
             "long_gain": None if m.long is None else m.long.gain_relative,
             "regions": final.params["soil_map"].regions
@@ -311,26 +316,34 @@ def soil_one(case: tuple[str, int]) -> dict:
             "seconds": time.perf_counter() - start}
 
 
-def soil_table(n: int, jobs: int) -> str:
+def soil_cases(kinds: list[str]) -> list[tuple[str, str]]:
+    """(layout, vehicle kind) pairs: every layout under a differential drive, the tests' two
+    rectangles under the other kinds."""
+    return [(layout, kind) for kind in kinds
+            for layout in (SOIL_LAYOUTS if kind == "diff_drive" else ("two rectangles",))]
+
+
+def soil_table(n: int, jobs: int, kinds: list[str]) -> str:
     """What the field logs of every soil layout are named (markdown)."""
-    cases = [(layout, seed) for layout in SOIL_LAYOUTS for seed in range(3, 3 + n)]
+    pairs = soil_cases(kinds)
+    cases = [(layout, seed, kind) for layout, kind in pairs for seed in range(3, 3 + n)]
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         results = list(pool.map(soil_one, cases))
-    rows = ["| layout | seed | named | regions | soil_map held-out error ratio | p (short) | "
-            "gain (long) | time |", "|---|---|---|---|---|---|---|---|"]
+    rows = ["| layout | vehicle | seed | named | regions | soil_map held-out error ratio | "
+            "p (short) | gain (long) | time |", "|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         long = "-" if r["long_gain"] is None else f"{r['long_gain']:+.2f}"
         regions = "-" if r["regions"] is None else str(r["regions"])
-        rows.append(f"| {r['layout']} | {r['seed']} | {'+'.join([r['cause'], *r['also']])} | "
-                    f"{regions} | {r['ratio']:.3f} | {r['p']:.2g} | {long} | "
-                    f"{r['seconds']:.0f} s |")
-    summary = ["", "| layout | soil_map named | held-out error ratio (median, range) |",
-               "|---|---|---|"]
-    for layout in SOIL_LAYOUTS:
-        mine = [r for r in results if r["layout"] == layout]
+        rows.append(f"| {r['layout']} | {r['kind']} | {r['seed']} | "
+                    f"{'+'.join([r['cause'], *r['also']])} | {regions} | {r['ratio']:.3f} | "
+                    f"{r['p']:.2g} | {long} | {r['seconds']:.0f} s |")
+    summary = ["", "| layout | vehicle | soil_map named | held-out error ratio (median, range) |",
+               "|---|---|---|---|"]
+    for layout, kind in pairs:
+        mine = [r for r in results if (r["layout"], r["kind"]) == (layout, kind)]
         named = sum(r["cause"] == "soil_map" or "soil_map" in r["also"] for r in mine)
         ratios = [r["ratio"] for r in mine]
-        summary.append(f"| {layout} | {named}/{len(mine)} | {np.median(ratios):.3f} "
+        summary.append(f"| {layout} | {kind} | {named}/{len(mine)} | {np.median(ratios):.3f} "
                        f"({min(ratios):.3f}-{max(ratios):.3f}) |")
     return "\n".join(rows + summary)
 
@@ -342,8 +355,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, default=120.0, help="log length [s]")
     parser.add_argument("--seed", type=int, default=None, help="base seed (default: random)")
     parser.add_argument("--jobs", type=int, default=2, help="worker processes")
-    parser.add_argument("--effects", default=",".join(GENERATED),
-                        help="comma-separated effects to draw from (default: all generated)")
+    parser.add_argument("--effects", default=",".join(DRAWN),
+                        help="comma-separated effects to draw from (default: those drawn at "
+                             f"random, {','.join(DRAWN)}; also: "
+                             f"{','.join(e for e in GENERATED if e not in DRAWN)})")
     parser.add_argument("--vehicles", default=None,
                         help="comma-separated generator vehicles (synth.VEHICLES labels: "
                              "diff_drive, skid_steer, tracked, rover4ws): --n logs per "
@@ -355,6 +370,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="seeds per vehicle kind, case and length (default 0: skip)")
     parser.add_argument("--soil", type=int, default=0,
                         help="field logs per soil layout (default 0: skip)")
+    parser.add_argument("--soil-kinds", default="diff_drive",
+                        help="comma-separated vehicle kinds of --soil (diff_drive: every "
+                             "layout; skid_steer, rover4ws: the tests' two rectangles)")
     parser.add_argument("--lengths", default="60,120,300",
                         help="comma-separated log lengths [s] of --kinds")
     args = parser.parse_args(argv)
@@ -362,7 +380,12 @@ def main(argv: list[str] | None = None) -> int:
         lengths = [float(v) for v in args.lengths.split(",")]
         print(kinds_table(args.kinds, lengths, args.jobs), flush=True)
     if args.soil > 0:
-        print(soil_table(args.soil, args.jobs), flush=True)
+        soil_kinds = args.soil_kinds.split(",")
+        unknown = sorted(set(soil_kinds) - {"diff_drive", "skid_steer", "rover4ws"})
+        if unknown:
+            parser.error(f"--soil-kinds: unknown kind(s) {unknown}; "
+                         "use diff_drive, skid_steer, rover4ws")
+        print(soil_table(args.soil, args.jobs, soil_kinds), flush=True)
     if args.kinematic > 0:
         print(kinematic_table(args.kinematic, args.duration, args.jobs), flush=True)
     if args.n <= 0:

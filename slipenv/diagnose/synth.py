@@ -11,7 +11,8 @@ vehicle kinds, what changes in the world, which columns the log needs — is in 
 
 Why some effects are hidden on one kind only: on a skid-steer vehicle a softer longitudinal
 law shows mainly in turns (the scrub torque dominates and the slip follows the combined law),
-so soil patches are hidden on the differential-drive vehicle; torque slip is hidden on every
+so soil patches are hidden on the differential-drive vehicle, soil maps (two fields of their
+own softness) on it and on the rover (on a slope, as torque slip); torque slip is hidden on every
 kind, but on a skid-steer vehicle it is the world ``turning_slip`` hides and is named so (its
 ``Confound``; the benchmark counts it apart), and the rover stands on a slope so that it
 has a drive torque to slip with (``effects/torque_slip.py``); a
@@ -98,6 +99,8 @@ PHYSICAL_KIND = {label: make().kind for label, make in VEHICLES.items()}
 """The vehicle kind (``VehicleSpec.kind``) of each label: what an effect's ``Hiding.kinds``,
 the force law of rigid ground and the diagnosis go by."""
 GENERATED = ("none", *(name for name, e in EFFECTS.items() if e.hiding is not None))
+DRAWN = ("none", *(name for name in GENERATED[1:] if EFFECTS[name].hiding.drawn))
+"""The effects :func:`generate` picks from at random (the others only when named)."""
 KINDS = {"none": tuple(VEHICLES)} | {
     name: tuple(label for label in VEHICLES if PHYSICAL_KIND[label] in EFFECTS[name].hiding.kinds)
     for name in GENERATED[1:]}
@@ -175,7 +178,7 @@ def hidden_world(kind: str, name: str, rng: np.random.Generator,
     if hiding is None:
         return cfg, {}, world
     spec = make_vehicle(cfg.vehicle)
-    ctx = DrawContext(PHYSICAL_KIND[kind], spec, ARENA_M[kind], focus,
+    ctx = DrawContext(PHYSICAL_KIND[kind], spec, arena_m(kind, slope > 0.0), focus,
                       lambda: typical_torque_nm(kind), slope)
     hidden = hiding.draw(rng, ctx)
     if hidden.slip_options:
@@ -187,6 +190,12 @@ def hidden_world(kind: str, name: str, rng: np.random.Generator,
                                       wheels, wheel_sides(wheels))
     model = {name: {k: v[0] for k, v in params.items()}}
     return extend(cfg, {name: hidden.params}), model, world
+
+
+def arena_m(kind: str, sloped: bool) -> float:
+    """Half-size of the waypoint box [m]; twice ``ARENA_M`` on a slope (long legs, gentle
+    turns)."""
+    return ARENA_M[kind] * (2.0 if sloped else 1.0)
 
 
 @functools.lru_cache(maxsize=4)
@@ -225,7 +234,7 @@ def drive(cfg: SlipEnvConfig, kind: str, rng: np.random.Generator, duration_s: f
     rec = LogRecorder(meta, columns)
     steered = any(w.steered for w in nominal.wheels)  # the log holds the steering angles
     sloped = cfg.terrain.kind == "slope"
-    arena = ARENA_M[kind] * (2.0 if sloped else 1.0)  # slopes: long legs, gentle turns
+    arena = arena_m(kind, sloped)
     turn_ratio = MAX_TURN_RATIO[kind] * (0.4 if sloped else 1.0)
     try:
         truth = sim.reset(0.0, 0.0, float(rng.uniform(-math.pi, math.pi)))
@@ -311,7 +320,7 @@ def generate(seed: int, effect: str | None = None, kind: str | None = None,
     seed : int
         Everything random (effect, size, route, noise, columns, gaps) follows from it.
     effect : str, optional
-        One of ``GENERATED``; random if None.
+        One of ``GENERATED``; random among ``DRAWN`` if None.
     kind : str, optional
         A label of ``VEHICLES`` (``diff_drive``, ``skid_steer``, ``tracked``, ``rover4ws``);
         random among those the effect is hidden on (``KINDS``) if None.
@@ -324,7 +333,7 @@ def generate(seed: int, effect: str | None = None, kind: str | None = None,
         Cut 1-2 stretches of 3-6 s out of the ground truth; random if None.
     """
     rng = np.random.default_rng(seed)
-    effect = effect or str(rng.choice(GENERATED))
+    effect = effect or str(rng.choice(DRAWN))
     if effect not in GENERATED:
         raise ValueError(f"cannot hide {effect!r}; the generator hides {GENERATED}")
     kinds = KINDS[effect]
@@ -348,7 +357,7 @@ def generate(seed: int, effect: str | None = None, kind: str | None = None,
     world.update({k: v for values in model.values() for k, v in values.items()})
     if effect in EXACT[kind]:
         truth = dict(model[effect])
-    elif effect != "none":
+    elif effect != "none" and hiding.compare:
         truth = {k: v[0] for k, v in calibrate(cfg, kind, (effect,), meta_w, focus).items()}
     else:
         truth = {}

@@ -219,3 +219,21 @@ def test_the_fitted_map_is_applied_to_the_simulation_as_patches(field_problem):
         assert soil_map.params_at(np.array([x]), np.array([y])) != \
             base.params_at(np.array([x]), np.array([y]))
     assert m.compliance_at(np.array([4.5, -4.0])) < 0.001  # firm ground stays firm
+
+
+@pytest.mark.parametrize("kind", ["skid_steer", "rover4ws"])
+def test_soil_regions_are_mapped_on_skid_steer_and_rover_logs(kind):
+    """Issue 14 item 4: the map applies wherever torque slip does. The fields of ``REGIONS``
+    under a skid-steer vehicle's and the rover's wheels: every wheel slips by its own torque
+    times the compliance of the ground under the vehicle."""
+    log = kinematic_log(3, None, duration_s=180.0, route="field", soil_regions=REGIONS,
+                        kind=kind)
+    problem = Problem.from_segments(build_segments([log]))
+    m = _quiet(fit, problem, ("soil_map",)).params["soil_map"]
+    pos = problem.seg.pos[np.abs(problem.seg.dphi).sum(axis=-1) > 0]
+    fitted, true = m.compliance_at(pos), _truth_compliance(pos[:, 0], pos[:, 1])
+    agree = np.mean((fitted > 0.5 * REGIONS[1].compliance_per_nm) == (true > 0))
+    assert agree > 0.95, agree  # 0.99 (skid-steer) and 0.97 (rover) measured
+    for level in (0.006, 0.008):  # within 5 % (0.4-1.7 % measured)
+        near = np.isclose(true, level)
+        assert abs(np.median(fitted[near]) - level) < 0.05 * level, (level, kind)

@@ -51,3 +51,25 @@ def test_generated_log_of_a_new_vehicle_is_its_kind_and_follows_the_nominal_mode
     end_error = np.hypot(res[:, -1, 0], res[:, -1, 1])
     step = np.hypot(np.diff(seg.gt[..., 0], axis=1), np.diff(seg.gt[..., 1], axis=1))
     assert float(np.median(end_error / np.maximum(step.sum(axis=1), 1e-3))) < 0.05
+
+
+def test_a_hidden_soil_map_is_a_field_split_in_two_across_the_focus_on_request_only():
+    """The generator hides a soil map (two halves of a field, the second 1.6-2.4 times as soft)
+    on the differential drive and, on a slope, the rover; it is drawn only when asked for, so
+    the seeds of the published tables give the same logs as before it existed."""
+    from slipenv.terramechanics.soil_map import PatchSoilMap
+
+    assert "soil_map" in synth.GENERATED and "soil_map" not in synth.DRAWN
+    assert set(synth.KINDS["soil_map"]) == {"diff_drive", "rover4ws"}
+    focus = (0.4, -0.3)
+    cfg, model, world = synth.hidden_world("rover4ws", "soil_map", np.random.default_rng(4),
+                                           focus)
+    assert 6.0 <= world["slope_deg"] <= 12.0  # the rover's drive torque is its grade torque
+    assert isinstance(cfg.soil_map, PatchSoilMap)
+    levels = model["soil_map"]["c_region0_per_nm"], model["soil_map"]["c_region1_per_nm"]
+    assert 1.6 <= levels[1] / levels[0] <= 2.4
+    m = EFFECTS["soil_map"].from_contract(model["soil_map"], [], np.zeros(0, dtype=int))
+    # a step either way across the focus along the map's axis: one half, then the other
+    along = 0.05 * np.array([np.cos(m.angle_rad), np.sin(m.angle_rad)])
+    sides = m.compliance_at(np.array([np.add(focus, along), np.subtract(focus, along)]))
+    assert sorted(sides) == sorted(levels)

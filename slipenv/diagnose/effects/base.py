@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from slipenv.contracts.constants import G_MPS2
 from slipenv.diagnose.segments import Segments
 
 HUGE = 1e12  # stiffness reported for a zero compliance (JSON has no infinity)
@@ -172,6 +173,19 @@ class DrawContext:
     typical_torque_nm: Callable[[], float]
     slope_deg: float = 0.0
 
+    def grade_torque_nm(self) -> float:
+        """Channel torque that holds the vehicle on its slope, m g sin α r / n_channels
+        [N m]."""
+        spec = self.spec
+        return (spec.mass_kg * G_MPS2 * float(np.sin(np.radians(self.slope_deg)))
+                * spec.wheel_radius_nominal_m / len(spec.channels))
+
+    def slip_torque_nm(self) -> float:
+        """The torque a drawn torque compliance is sized for [N m]: the rover's grade torque
+        (on level rigid ground its only drive torque is its wheels fighting one another),
+        else the clean world's typical torque."""
+        return self.grade_torque_nm() if self.kind == "rover4ws" else self.typical_torque_nm()
+
 
 @dataclass(frozen=True)
 class Hidden:
@@ -207,6 +221,13 @@ class Hiding:
         The physics takes the parameters one to one (else the truth is calibrated).
     level_width : bool
         The log's nominal track width is calibrated on level ground of the same world.
+    compare : bool
+        The fitted parameters can be compared with a truth. False for a soil map: its layout
+        is a model-order choice, and two layouts' regions do not correspond one to one.
+    drawn : bool
+        Among the effects a generator draws at random (``synth.DRAWN``); False: hidden only
+        when asked for by name, so that the seeds of tables made before it still give the
+        same logs.
     """
 
     kinds: tuple[str, ...]
@@ -218,6 +239,8 @@ class Hiding:
     drop_columns: frozenset[str] = frozenset()
     exact: bool = False
     level_width: bool = False
+    compare: bool = True
+    drawn: bool = True
 
     def sloped(self, kind: str) -> bool:
         """True if a vehicle of ``kind`` always stands on a slope of ``slope_deg``."""

@@ -20,7 +20,10 @@ the other training segments are scored on each of ``_K_FOLDS`` interleaved folds
 fewest within ``K_TOLERANCE`` of the best held-out error win. The full fit then refines the
 compliances with the layout held (the layout is a model-order choice, not a fitted number).
 Simulation: a ``PatchSoilMap`` of turned rectangles (the cells the edges draw, each with its
-summed compliance) over the base soil.
+summed compliance) over the base soil. Hidden in the PyBullet tests on request
+(``Hiding.drawn`` False): a field split in two halves of their own softness across the
+route's focus (:func:`draw`), on level differential-drive ground and under the rover on a
+slope.
 
 Contract names: ``map_angle_rad``, ``map_rects`` (n), ``map_rect<k>_u0_m`` … ``_v1_m`` and
 ``map_rect<k>_region`` (rectangle k's corners in the map frame, u along the angle and v
@@ -39,7 +42,10 @@ import numpy as np
 from slipenv.diagnose import regions
 from slipenv.diagnose.effects.base import (
     Bound,
+    DrawContext,
     Effect,
+    Hidden,
+    Hiding,
     Scalar,
     StartContext,
     Term,
@@ -288,6 +294,28 @@ def apply(edit: WorldEdit, p) -> None:
         edit.replace["soil_map"] = PatchSoilMap(edit.soil, patches, blend_width_m=0.0)
 
 
+def draw(rng: np.random.Generator, ctx: DrawContext) -> Hidden:
+    """A field split in two of their own softness across the route's focus (a wetter half),
+    turned at random: each half 0.4-0.7 of the arena's half-size long and 0.4-0.8 wide, so
+    that the legs through the focus cross both and the edge between them; 2-5 % slip on the
+    first at the drawn torque (``DrawContext.slip_torque_nm``), 1.6-2.4 times as much on the
+    second."""
+    angle = float(rng.uniform(0.0, np.pi / 2))
+    arena = ctx.arena_m
+    centre = regions.to_map(np.asarray(ctx.focus, dtype=float), angle)
+    rects = []
+    for side in (1.0, -1.0):
+        length = float(rng.uniform(0.4, 0.7)) * arena
+        half_width = 0.5 * float(rng.uniform(0.4, 0.8)) * arena
+        shift = float(rng.uniform(-0.25, 0.25)) * half_width
+        far = centre[0] + side * length
+        rects.append((min(centre[0], far), centre[1] + shift - half_width,
+                      max(centre[0], far), centre[1] + shift + half_width))
+    c0 = float(rng.uniform(0.02, 0.05)) / ctx.slip_torque_nm()
+    levels = np.array([c0, c0 * float(rng.uniform(1.6, 2.4))])
+    return Hidden(_params(angle, regions.Layout(tuple(rects), (0, 1)), levels))
+
+
 EFFECT = Effect(
     name="soil_map",
     meaning="soil stiffness varies in space: a few regions with continuous edges, each its "
@@ -298,6 +326,11 @@ EFFECT = Effect(
               *(Scalar(name, f"c_region{k}_per_nm") for k, name in enumerate(_LEVELS))),
     mechanism="torque slip law", fixed=_FIXED,
     local=True, condense=condense,
+    # level differential drive (as soil_patch), the rover on a slope (its drive torque, as
+    # torque_slip); a skid-steer vehicle shows a softer longitudinal law as turning slip
+    hiding=Hiding(("diff_drive", "rover4ws"), draw, slope_deg=(6.0, 12.0),
+                  slope_kinds=("rover4ws",), random_slope=False,
+                  columns=frozenset({"torque"}), compare=False, drawn=False),
     # a hand-written map may leave out the rectangles and regions it does not use
     optional={**{f"map_rect{k}_{e}": 0.0 for k in range(1, MAX_RECTS)
                  for e in (*_EDGES, "region")},

@@ -32,7 +32,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from slipenv.contracts.constants import G_MPS2
 from slipenv.diagnose.effects.base import (
     Bound,
     Confound,
@@ -83,17 +82,9 @@ def apply(edit: WorldEdit, p: TorqueSlip) -> None:
     edit.slip_options["long_scale"] = p.stiffness_nm() / edit.channel_stiffness()
 
 
-def grade_torque_nm(ctx: DrawContext) -> float:
-    """Channel torque that holds the vehicle on its slope, m g sin α r / n_channels [N m]."""
-    spec = ctx.spec
-    return (spec.mass_kg * G_MPS2 * float(np.sin(np.radians(ctx.slope_deg)))
-            * spec.wheel_radius_nominal_m / len(spec.channels))
-
-
 def draw(rng: np.random.Generator, ctx: DrawContext) -> Hidden:
     slip = float(rng.uniform(0.02, 0.06))
-    torque = grade_torque_nm(ctx) if ctx.kind == "rover4ws" else ctx.typical_torque_nm()
-    c = slip / torque
+    c = slip / ctx.slip_torque_nm()
     return Hidden(TorqueSlip(c, c))
 
 
