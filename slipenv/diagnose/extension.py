@@ -109,7 +109,10 @@ def parse_model(model: Any) -> Extension:
         if missing or (per_wheel and not named):
             raise ValueError(f"effect {name!r} is missing parameter(s) "
                              f"{missing or sorted(eff.contract_names(['<wheel>']))}")
-        out[name] = eff.from_contract(values, named, wheel_sides(named))
+        try:
+            out[name] = eff.from_contract(values, named, wheel_sides(named))
+        except ValueError as exc:  # the parameters' own checks name their fields
+            raise _named(name, exc, f" (parameters {sorted(values)})") from exc
         wheels |= set(named)
     return Extension(out, nominal, kind, tuple(sorted(wheels)))
 
@@ -173,8 +176,24 @@ def extend(config: SlipEnvConfig, effects: Mapping[str, Term],
     :func:`apply_model`)."""
     edit = WorldEdit.of(config, nominal)
     for name, params in effects.items():
-        effect(name).apply(edit, params)
-    return edit.build()
+        try:
+            effect(name).apply(edit, params)
+        except ValueError as exc:  # e.g. the world's own checks (a vehicle 30 m wide)
+            raise _named(name, exc, "", "cannot be applied to the simulation: ") from exc
+    try:
+        return edit.build()
+    except ValueError as exc:
+        raise _named("+".join(effects), exc, "", "cannot be applied to the simulation: ") \
+            from exc
+
+
+def _named(name: str, exc: ValueError, suffix: str, what: str = "") -> ValueError:
+    """``exc`` with the effect's name in front (unless it already starts with it)."""
+    text = str(exc)
+    if text.startswith(f"effect {name!r}"):
+        return ValueError(text + suffix)
+    return ValueError(f"effect {name!r} {what}{text}{suffix}" if what
+                      else f"effect {name!r}: {text}{suffix}")
 
 
 def apply_model(config: SlipEnvConfig, report: Any) -> SlipEnvConfig:

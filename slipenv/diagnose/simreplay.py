@@ -187,6 +187,7 @@ def pybullet_overlay(log: Log, sel: Selection, problem, seed: int = 0,
                "track_width_m": log.meta.track_width_m}
     sims: dict = {"nominal": _simulator(base, hz)}
     out: dict = {"logged": [], "nominal": [], "extended": [], "segments": len(rows)}
+    refused: list[str] = []  # fold models the simulation cannot take (a negative stiffness)
     try:
         for j in tqdm(rows, desc="PyBullet replay", unit="segment", disable=not progress):
             n = int(np.flatnonzero(seg.gt_ok[j])[-1]) + 1
@@ -201,17 +202,28 @@ def pybullet_overlay(log: Log, sel: Selection, problem, seed: int = 0,
                 continue
             k = int(np.searchsorted(folds, sel.folds[j]))
             if k not in sims:  # the generic vehicle is built for the log: no vehicle check
-                sims[k] = _simulator(extend(base, cand.fold_fits[k].params, nominal), hz)
-            out["extended"].append(replay_segment(sims[k], seg.t[j, :n], speeds, seg.gt[j, 0]))
+                try:
+                    sims[k] = _simulator(extend(base, cand.fold_fits[k].params, nominal), hz)
+                except ValueError as exc:
+                    sims[k] = None
+                    refused.append(f"fold {k}: {exc}")
+            out["extended"].append(
+                np.full((n, 3), np.nan) if sims[k] is None
+                else replay_segment(sims[k], seg.t[j, :n], speeds, seg.gt[j, 0]))
     finally:
         for sim in sims.values():
-            sim.close()
+            if sim is not None:
+                sim.close()
     for name in ("nominal", "extended"):
         err = [np.hypot(*(s[:, :2] - g[:, :2]).T) for s, g in zip(out[name], out["logged"],
                                                                    strict=True)]
         err = np.concatenate(err) if err else np.zeros(1)
-        out[f"rmse_{name}_m"] = float(np.sqrt(np.nanmean(err**2)))
+        err = err[np.isfinite(err)]  # a blow-up, or a fold the world could not take
+        out[f"rmse_{name}_m"] = float(np.sqrt(np.mean(err**2))) if err.size else float("nan")
     out["note"] = ("Generic vehicle with the log's nominal geometry on rigid ground (mass and "
                    "chassis assumed); extended world = nominal world + the model fitted "
                    "without each segment's fold, carried in by extension.extend.")
+    if refused:
+        out["note"] += (" Not replayed in the extended world (the model fitted without the "
+                        "fold cannot be applied to the simulation): " + "; ".join(refused))
     return out

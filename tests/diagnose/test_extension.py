@@ -106,6 +106,36 @@ def test_bad_models_are_clear_errors(model, message):
         parse_model(model)
 
 
+_MAP = {"map_angle_rad": 0.3, "map_rects": 1.0, "map_rect0_u0_m": 0.0, "map_rect0_v0_m": -1.0,
+        "map_rect0_u1_m": 2.0, "map_rect0_v1_m": 1.0, "map_rect0_region": 0.0}
+
+
+@pytest.mark.parametrize(("model", "message"), [
+    # a fit's bounds straddle zero, so a fitted (or edited) value can be one the physics
+    # cannot take: refused naming the parameter, never a world with a negative stiffness
+    ({"torque_slip": {"k_s_left_nm": -50.0, "k_s_right_nm": 400.0}},
+     r"'torque_slip': k_s_<wheel>_nm cannot be applied .* must be > 0"),
+    ({"torque_slip": {"k_s_left_nm": 0.0, "k_s_right_nm": 400.0}},
+     r"'torque_slip': k_s_<wheel>_nm must be nonzero"),
+    ({"soil_patch": {"patch_center_x_m": 0.0, "patch_center_y_m": 0.0, "patch_radius_m": 1.0,
+                     "k_s_left_nm": -50.0, "k_s_right_nm": -50.0}},
+     r"'soil_patch': k_s_<wheel>_nm cannot be applied"),
+    ({"soil_map": {**_MAP, "c_region0_per_nm": -0.01}},
+     r"'soil_map': c_region0_per_nm cannot be applied .* >= 0"),
+    ({"combined_slip": {"s_x0": 1.5, "k_beta": 0.5, "beta0_rad": 0.0}},
+     r"'combined_slip': s_x0 cannot be applied .* \|s_x0\| < 1"),
+    ({"track_width": {"track_width_m": 0.0}},
+     r"'track_width': TrackWidth: width_m must be > 0.*\['track_width_m'\]"),
+    # the world's own checks, named by the effect that broke them (a 32 m wide vehicle)
+    ({"turning_slip": {"endo_n": 0.8, "turn_slip_scale": 0.97}},
+     r"'turning_slip' cannot be applied to the simulation: .*track_width_m"),
+])
+def test_a_model_the_simulation_cannot_take_is_refused_naming_the_parameter(model, message):
+    config = SlipEnvConfig(**FARM)
+    with pytest.raises(ValueError, match=message):
+        apply_model(config, model)
+
+
 def test_unknown_effect_in_make_env_is_an_error():
     with pytest.raises(ValueError, match="unknown effect"):
         make_extended({"slope": {}})

@@ -149,3 +149,30 @@ def test_a_failing_least_squares_fit_is_an_error_naming_the_log(tmp_path, monkey
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
     assert "run_7" in err and "least-squares" in err and "not finite" in err
+
+
+def test_a_fold_model_the_simulation_cannot_take_is_not_replayed_and_the_report_says_so():
+    """The human report's PyBullet replay extends the world by each fold's fit; a fit with a
+    negative torque stiffness (the bounds allow it) is refused by the world, so those
+    segments have no extended replay, the note names why, and nothing prints NaN."""
+    from slipenv.diagnose.fit import Fit, Problem
+    from slipenv.diagnose.replay import build_segments
+    from slipenv.diagnose.select import Candidate, Selection
+    from slipenv.diagnose.simreplay import pybullet_overlay
+
+    log = kinematic_log(5, None, duration_s=20.0, route="mixed")
+    seg = build_segments([log])
+    names = ["torque_slip.compliance_left_per_nm", "torque_slip.compliance_right_per_nm"]
+    bad = Fit(("torque_slip",), names, np.array([-0.01, -0.01]), np.zeros((2, 2)), 0.0, 1)
+    cand = Candidate(("torque_slip",), "pose", fold_fits=[bad])
+    folds = np.zeros(len(seg), dtype=int)
+    sel = Selection(cause="torque_slip", also=[], candidates=[cand], baseline={},
+                    final={"pose": cand}, fits={}, folds=folds)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim = pybullet_overlay(log, sel, Problem.from_segments(seg))
+    assert sim["segments"] > 0 and np.isfinite(sim["rmse_nominal_m"])
+    assert all(np.isnan(e).all() for e in sim["extended"])
+    assert "cannot be applied to the simulation" in sim["note"]
+    assert "k_s_<wheel>_nm" in sim["note"]
+    assert num(sim["rmse_extended_m"]) == "n/a"

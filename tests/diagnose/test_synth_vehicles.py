@@ -73,3 +73,33 @@ def test_a_hidden_soil_map_is_a_field_split_in_two_across_the_focus_on_request_o
     along = 0.05 * np.array([np.cos(m.angle_rad), np.sin(m.angle_rad)])
     sides = m.compliance_at(np.array([np.add(focus, along), np.subtract(focus, along)]))
     assert sorted(sides) == sorted(levels)
+
+
+@pytest.mark.parametrize("vehicle", ["diff_drive", "rover4ws"])
+def test_a_soil_map_hidden_in_the_physics_is_mapped_from_a_three_minute_log(vehicle):
+    """End to end through PyBullet: the drawn map becomes turned rectangles of softer soil
+    under the wheels, and the map fitted on the log finds where the ground is soft and cuts
+    the held-out error (ratios 0.12-0.80 and soft/firm agreement 0.80-0.92 on seeds 1-8
+    measured). With the world's cells turned the wrong way about the origin the differential-
+    drive case fails (checked); with no map applied there is nothing to find."""
+    from slipenv.diagnose.fit import Problem, fit
+    from slipenv.diagnose.replay import build_segments
+    from slipenv.diagnose.select import cross_validate, make_folds
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = synth.generate(1, "soil_map", vehicle, duration_s=180.0)
+        seg = build_segments([s.log])
+        problem = Problem.from_segments(seg)
+        folds = make_folds(seg)
+        base = cross_validate(problem, (), folds)
+        mapped = cross_validate(problem, ("soil_map",), folds)
+        fitted = fit(problem, ("soil_map",)).params["soil_map"]
+    assert mapped.errors.sum() < 0.85 * base.errors.sum()
+    hidden = {k: v for k, v in s.world.items() if EFFECTS["soil_map"].matches(k)}
+    truth = EFFECTS["soil_map"].from_contract(hidden, [], np.zeros(0, dtype=int))
+    pos = seg.pos[np.abs(seg.dphi).sum(axis=-1) > 0]
+    soft = truth.compliance_at(pos) > 0
+    assert 0.2 < soft.mean() < 0.8  # the route crosses both soft and firm ground
+    found = fitted.compliance_at(pos) > 0.5 * truth.levels().min()
+    assert np.mean(found == soft) > 0.75

@@ -79,6 +79,15 @@ def require(condition: bool, owner: object, message: str) -> None:
         raise ValueError(f"{type(owner).__name__}: {message}")
 
 
+def applicable_to_world(condition: bool, effect: str, names: str, why: str) -> None:
+    """``ValueError`` naming the effect and its contract names unless ``condition``: for an
+    ``apply`` given values a fit may return (the bounds straddle them) but the simulation
+    cannot take (a negative stiffness)."""
+    if not condition:
+        raise ValueError(f"effect {effect!r}: {names} cannot be applied to the simulation: "
+                         f"{why}")
+
+
 def finite(owner: object) -> None:
     """``ValueError`` naming the field unless every field of ``owner`` is a finite number."""
     for f in dataclasses.fields(owner):
@@ -475,5 +484,9 @@ class Effect:
                     raise ValueError(f"effect {self.name!r}: no {('left', 'right')[side]} "
                                      f"wheel among {wheels}")
                 v = float(np.mean(vals))
+                if c.reciprocal and v == 0.0:
+                    raise ValueError(f"effect {self.name!r}: {c.template.format(w='<wheel>')} "
+                                     f"must be nonzero (the reciprocal of {name}; a rigid "
+                                     f"wheel's is {HUGE:g})")
                 kw[name] = 1.0 / v if c.reciprocal else v
         return self.params(**kw)

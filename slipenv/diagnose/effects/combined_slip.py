@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from slipenv.diagnose.effects.base import Bound, Effect, Scalar, Term, finite
+from slipenv.diagnose.effects.base import Bound, Effect, Scalar, Term, applicable_to_world, finite
 from slipenv.diagnose.effects.world import WorldEdit
 from slipenv.diagnose.segments import Segments
 
@@ -50,6 +50,9 @@ def bounds(seg: Segments) -> dict[str, Bound]:
 
 
 def apply(edit: WorldEdit, p: CombinedSlip) -> None:
+    applicable_to_world(abs(p.s_x0) < 1.0, EFFECT.name, "s_x0",
+                        f"the slip the wheel rolls free at is a slip ratio, |s_x0| < 1, got "
+                        f"{p.s_x0}")
     edit.slip_options.update(s_x0=p.s_x0, k_beta=p.k_beta, beta0_rad=p.beta0_rad)
 
 

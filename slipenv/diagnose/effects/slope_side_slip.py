@@ -66,7 +66,7 @@ def bounds(seg: Segments) -> dict[str, Bound]:
 
 
 def apply(edit: WorldEdit, p: SlopeSideSlip) -> None:
-    per_roll = abs(p.beta_per_roll) or 1e-6
+    per_roll = max(abs(p.beta_per_roll), 1e-6)  # no side slip: very stiff sideways
     edit.slip_options["lat_scale"] = (edit.spec.mass_kg * G_MPS2 / per_roll
                                       / edit.lateral_stiffness())
     edit.slip_options["lat_offset_rad"] = p.beta_offset_rad

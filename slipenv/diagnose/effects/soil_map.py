@@ -49,6 +49,7 @@ from slipenv.diagnose.effects.base import (
     Scalar,
     StartContext,
     Term,
+    applicable_to_world,
     compliance_bound,
     finite,
     needs_torque,
@@ -287,6 +288,11 @@ def condense(parameters: dict) -> tuple[dict, list[str]]:
 def apply(edit: WorldEdit, p) -> None:
     """Every region (and overlap) with torque slip (c > 0) becomes a turned rectangle of
     softer soil."""
+    levels = p.levels()
+    applicable_to_world(bool(np.all(levels >= 0.0)), EFFECT.name,
+                        ", ".join(f"c_region{r}_per_nm" for r in np.flatnonzero(levels < 0.0)),
+                        f"a region's torque compliance must be >= 0 (a driven wheel cannot "
+                        f"run ahead of its rim), got {levels.tolist()} 1/(N m)")
     base = edit.channel_stiffness()
     patches = [(rect, edit.softer(stiffness_nm(level) / base))
                for rect, level in p.patches() if level > 0.0]

@@ -23,6 +23,7 @@ from slipenv.diagnose.effects.base import (
     Scalar,
     StartContext,
     Term,
+    applicable_to_world,
     compliance_bound,
     finite,
     needs_torque,
@@ -121,6 +122,10 @@ def start(ctx: StartContext) -> list[SoilPatch]:
 
 
 def apply(edit: WorldEdit, p: SoilPatch) -> None:
+    sides = (p.compliance_left_per_nm, p.compliance_right_per_nm)
+    applicable_to_world(min(sides) >= 0.0, EFFECT.name, "k_s_<wheel>_nm",
+                        f"the patch's torque stiffness must be > 0 (a driven wheel cannot "
+                        f"run ahead of its rim), got compliances {sides} 1/(N m)")
     k_s = float(np.mean([stiffness_nm(p.compliance_left_per_nm),
                          stiffness_nm(p.compliance_right_per_nm)]))
     inner = edit.softer(k_s / edit.channel_stiffness())

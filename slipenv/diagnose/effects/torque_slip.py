@@ -41,6 +41,7 @@ from slipenv.diagnose.effects.base import (
     Hiding,
     PerSide,
     Term,
+    applicable_to_world,
     compliance_bound,
     finite,
     needs_torque,
@@ -79,6 +80,10 @@ def bounds(seg: Segments) -> dict[str, Bound]:
 
 
 def apply(edit: WorldEdit, p: TorqueSlip) -> None:
+    sides = (p.compliance_left_per_nm, p.compliance_right_per_nm)
+    applicable_to_world(min(sides) >= 0.0, EFFECT.name, "k_s_<wheel>_nm",
+                        f"a torque stiffness must be > 0 (a driven wheel cannot run ahead "
+                        f"of its rim), got compliances {sides} 1/(N m)")
     edit.slip_options["long_scale"] = p.stiffness_nm() / edit.channel_stiffness()
 
 
