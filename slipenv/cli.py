@@ -174,14 +174,17 @@ def _short_name(env: str) -> str:
 # -- run -----------------------------------------------------------------------------------
 def add_run(sub: SubParsers) -> argparse.ArgumentParser:
     from slipenv.controllers.baseline import BASELINE_NAMES
+    from slipenv.evaluation.policies import BUILTIN_POLICIES
 
     p = sub.add_parser("run", help="drive one episode with a baseline controller",
                        description="Drive one episode with a baseline controller; print a "
                                    "table judged on the true pose and write a trajectory plot.")
     p.add_argument("env_id", type=env_id, help="e.g. slipenv/HuskySand-v0 (see `slipenv list`)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="reset seed")
-    p.add_argument("--controller", choices=BASELINE_NAMES, default="yamauchi",
-                   help="baseline controller")
+    names = [*BASELINE_NAMES, *(k for k in BUILTIN_POLICIES if k not in BASELINE_NAMES)]
+    p.add_argument("--controller", choices=names, default="yamauchi",
+                   help="baseline controller (`slipenv evaluate --policy` names too: "
+                        "baseline = yamauchi, feedback = yamauchi_feedback)")
     p.add_argument("--max-steps", type=positive_int, default=None,
                    help="stop after this many steps (None: the env's time limit)")
     p.add_argument("--out", default="runs/{env}",
@@ -196,6 +199,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     json_path = writable_file(args.json, "--json")
     from slipenv.run import completion_text, format_table, plot_episode, run_episode, summarize
 
+    from slipenv.evaluation.policies import BUILTIN_POLICIES
+
+    args.controller = BUILTIN_POLICIES.get(args.controller, args.controller)
     rec = run_episode(args.env_id, seed=args.seed, controller=args.controller,
                       max_steps=args.max_steps, progress=not args.quiet)
     stats = summarize(rec)

@@ -8,8 +8,9 @@ env's reference speed and control period, and a residual agent needs its env wra
 name               policy
 =================  ========================================================================
 ``baseline``       Yamauchi §3 law with slip-angle feed-forward (Eq. 10), poles scaled to
-                   the path's speed (``slipenv.controllers.baseline``)
-``feedback``       the same law without the feed-forward (Eq. 9): β̂ ignored
+                   the path's speed (``slipenv.controllers.baseline``; also ``yamauchi``)
+``feedback``       the same law without the feed-forward (Eq. 9): β̂ ignored (also
+                   ``yamauchi_feedback``)
 ``pure_pursuit``   pure pursuit (``slipenv.controllers.pure_pursuit``)
 ``stanley``        Stanley's law (``slipenv.controllers.stanley``)
 PATH               a stable-baselines3 ``.zip``; the algorithm is read from a ``config.json``
@@ -37,6 +38,10 @@ BUILTIN_POLICIES: dict[str, str] = {
     "stanley": "stanley",
 }
 """Built-in policy name -> ``baseline_controller`` name."""
+CONTROLLER_ALIASES: dict[str, str] = {controller: name for name, controller
+                                      in BUILTIN_POLICIES.items() if controller != name}
+"""``slipenv run --controller`` names accepted for the same policies (``yamauchi`` is
+``baseline``, ``yamauchi_feedback`` is ``feedback``)."""
 
 # SB3 algorithms a saved model may come from, with a key only that algorithm saves
 # (PPO and A2C share ActorCriticPolicy; only PPO saves ``clip_range``).
@@ -173,7 +178,7 @@ def resolve_policy(policy: Any) -> PolicySource:
     if isinstance(policy, PolicySource):
         return policy
     if isinstance(policy, str | Path):
-        name = str(policy)
+        name = CONTROLLER_ALIASES.get(str(policy), str(policy))
         if name in BUILTIN_POLICIES:
             return PolicySource(label=name, kind="builtin", key=name)
         looks_like_path = name.endswith(".zip") or "/" in name or Path(name).exists()

@@ -151,16 +151,18 @@ def test_every_subcommand_is_in_the_dispatch_table_and_every_option_shows_help_a
 
 def test_the_advertised_controllers_are_exactly_the_accepted_ones(capsys, tmp_path):
     from slipenv.controllers.baseline import BASELINE_NAMES
+    from slipenv.evaluation.policies import BUILTIN_POLICIES
 
     run = subparsers()["run"]
     action = next(a for a in run._actions if a.dest == "controller")
-    assert tuple(action.choices) == BASELINE_NAMES
+    # the controllers, and `slipenv evaluate --policy`'s names for the same ones
+    assert set(action.choices) == set(BASELINE_NAMES) | set(BUILTIN_POLICIES)
     help_text = " ".join(run.format_help().split())
-    assert "{" + ",".join(BASELINE_NAMES) + "}" in help_text
-    for name in BASELINE_NAMES:  # each one advertised is accepted and drives the env
+    assert "{" + ",".join(action.choices) + "}" in help_text
+    for name in action.choices:  # each one advertised is accepted and drives the env
         assert main(["run", ENV, "--controller", name, "--max-steps", "5", "--quiet",
                      "--out", str(tmp_path / name)]) == 0
-        assert f"controller {name}" in capsys.readouterr().out
+        assert f"controller {BUILTIN_POLICIES.get(name, name)}" in capsys.readouterr().out
     one_line_error(capsys, ["run", ENV, "--controller", "mpc"], "--controller", "invalid choice")
 
 

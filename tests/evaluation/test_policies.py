@@ -35,6 +35,11 @@ def test_builtin_names_resolve_without_a_file():
         assert source.kind == "builtin" and source.key == name
 
 
+def test_the_run_commands_controller_names_resolve_to_the_same_policies():
+    assert resolve_policy("yamauchi").label == "baseline"
+    assert resolve_policy("yamauchi_feedback").label == "feedback"
+
+
 def test_unknown_name_lists_the_builtin_policies():
     with pytest.raises(ValueError, match="unknown policy 'pure-pursuit'.*pure_pursuit"):
         resolve_policy("pure-pursuit")
