@@ -197,9 +197,8 @@ def add_run(sub: SubParsers) -> argparse.ArgumentParser:
 def cmd_run(args: argparse.Namespace) -> int:
     out_dir = writable_dir(_fill(args.out, env=_short_name(args.env_id)), "--out")
     json_path = writable_file(args.json, "--json")
-    from slipenv.run import completion_text, format_table, plot_episode, run_episode, summarize
-
     from slipenv.evaluation.policies import BUILTIN_POLICIES
+    from slipenv.run import completion_text, format_table, plot_episode, run_episode, summarize
 
     args.controller = BUILTIN_POLICIES.get(args.controller, args.controller)
     rec = run_episode(args.env_id, seed=args.seed, controller=args.controller,

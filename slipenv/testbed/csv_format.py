@@ -20,7 +20,9 @@ fx_std_n, fy_std_n no        standard deviation of fx_n, fy_n within the trial [
 ``meta.json``: ``{"wheel_radius_m": r, "wheel_width_m": b, "contact_length_m": L (optional,
 default r/2), "slip_angle_definition": "reina" (Eq. 4, default) | "simulation", "notes": ...}``
 and a ``"sign_conventions"`` text the writer fills in. A bad file raises `ValueError` naming the
-file, the row (1 = first data row) and the column.
+file, the row (1 = first data row) and the column; so does a value no test bed measures (a
+force or load beyond 1e6 N, sinkage beyond 4 m, a wheel size beyond 2 m: a unit mistake or a
+corrupted cell).
 """
 
 from __future__ import annotations
@@ -73,9 +75,20 @@ class TestBedData:
         return np.tan(np.radians(self.slip_angle_deg))
 
 
+# Largest magnitudes a test-bed trial can hold (as ``slipenv.logs.bounds``: wide enough for a
+# mining truck's wheel, so that only a corrupted cell, a unit mistake or an overflow trips them).
+MAX_FORCE_N = 1e6  # a 100 t load on one wheel
+MAX_SINKAGE_M = 4.0  # twice the largest tyre's radius
+MAX_WHEEL_M = 2.0  # radius, width, contact length: the largest tyres (``VehicleSpec`` too)
+
+
 def _check_value(col: str, x: float, where: str) -> None:
     if not math.isfinite(x):
         raise ValueError(f"{where}, column {col!r}: {x!r} is not a finite number")
+    limit = MAX_SINKAGE_M if col == "sinkage_m" else MAX_FORCE_N
+    if col not in ("slip_ratio", "slip_angle_deg") and abs(x) > limit:
+        raise ValueError(f"{where}, column {col!r}: {x!r} is beyond {limit:g} (not a "
+                         f"test-bed trial: a unit mistake or a corrupted cell)")
     if col == "slip_ratio" and not -1.0 <= x <= 1.0:
         raise ValueError(f"{where}, column 'slip_ratio': {x!r} is outside [-1, 1]")
     if col == "slip_angle_deg" and not abs(x) < 90.0:
@@ -94,17 +107,21 @@ def _read_meta(path: pathlib.Path) -> dict:
     if not isinstance(meta, dict):
         raise ValueError(f"{path}: must hold a JSON object")
     for key in ("wheel_radius_m", "wheel_width_m"):
-        value = meta.get(key)
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise ValueError(f"{path}: key {key!r} must be a number > 0, got {value!r}")
-    length = meta.setdefault("contact_length_m", 0.5 * meta["wheel_radius_m"])
-    if not (isinstance(length, (int, float)) and length > 0):
-        raise ValueError(f"{path}: key 'contact_length_m' must be a number > 0, got {length!r}")
+        _check_size(path, key, meta.get(key))
+    _check_size(path, "contact_length_m",
+                meta.setdefault("contact_length_m", 0.5 * meta["wheel_radius_m"]))
     definition = meta.setdefault("slip_angle_definition", "reina")
     if definition not in ("reina", "simulation"):
         raise ValueError(f"{path}: key 'slip_angle_definition' must be 'reina' or "
                          f"'simulation', got {definition!r}")
     return meta
+
+
+def _check_size(path: pathlib.Path, key: str, value) -> None:
+    if not (isinstance(value, int | float) and not isinstance(value, bool)
+            and math.isfinite(value) and 0.0 < value <= MAX_WHEEL_M):
+        raise ValueError(f"{path}: key {key!r} must be a number in (0, {MAX_WHEEL_M:g}] m, "
+                         f"got {value!r}")
 
 
 def read_testbed(directory: str | pathlib.Path) -> TestBedData:
