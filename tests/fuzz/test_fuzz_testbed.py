@@ -21,7 +21,7 @@ from slipenv.testbed.csv_format import (
     write_testbed,
 )
 
-from .conftest import FUZZ, time_limit
+from .conftest import CSV_CORRUPTIONS, FUZZ, corrupt_csv, corruptions, time_limit
 
 META = {"wheel_radius_m": 0.092, "wheel_width_m": 0.11}
 ROWS = [{"slip_ratio": s, "slip_angle_deg": a, "normal_load_n": 64.7, "fx_n": 40.0 * s,
@@ -38,44 +38,25 @@ META_VALUES = st.sampled_from([None, -1.0, 0.0, 1e-9, 3.0, 1e300, math.inf, "x",
 META_KEYS = ["wheel_radius_m", "wheel_width_m", "contact_length_m", "slip_angle_definition"]
 
 
-@st.composite
-def corruptions(draw):
-    kind = draw(st.sampled_from(["cell", "cell", "row_len", "drop_column", "truncate",
-                                 "meta", "meta_drop", "meta_text"]))
-    return kind, draw(st.integers(0, 10**6)), draw(CELLS), draw(META_VALUES), draw(
-        st.sampled_from(META_KEYS))
+CASES = corruptions(("meta", "meta_drop", "meta_text"), CELLS, META_VALUES, META_KEYS)
 
 
 def corrupt(folder: Path, case) -> None:
     kind, k, cell, meta_value, key = case
-    trials, meta = folder / "trials.csv", folder / "meta.json"
-    rows = [line.split(",") for line in trials.read_text().splitlines()]
-    if kind == "cell":
-        r = 1 + k % (len(rows) - 1)
-        rows[r][k % len(rows[r])] = cell.replace(",", ";").replace("\n", " ")
-    elif kind == "row_len":
-        r = 1 + k % (len(rows) - 1)
-        rows[r] = rows[r][:-1] if k % 2 else rows[r] + ["1"]
-    elif kind == "drop_column":
-        c = k % len(rows[0])
-        rows = [row[:c] + row[c + 1:] for row in rows]
-    elif kind == "truncate":
-        text = trials.read_text()
-        trials.write_text(text[: k % (len(text) + 1)])
+    if kind in CSV_CORRUPTIONS:
+        corrupt_csv(folder / "trials.csv", kind, k, cell)
         return
-    else:
-        data = json.loads(meta.read_text())
-        if kind == "meta":
-            data[key] = meta_value
-        elif kind == "meta_drop":
-            data.pop(key, None)
-        meta.write_text(json.dumps(data) if kind != "meta_text" else json.dumps(data)[:k % 40])
-        return
-    trials.write_text("\n".join(",".join(row) for row in rows) + "\n")
+    meta = folder / "meta.json"
+    data = json.loads(meta.read_text())
+    if kind == "meta":
+        data[key] = meta_value
+    elif kind == "meta_drop":
+        data.pop(key, None)
+    meta.write_text(json.dumps(data) if kind != "meta_text" else json.dumps(data)[:k % 40])
 
 
 @FUZZ
-@given(case=corruptions())
+@given(case=CASES)
 def test_a_corrupted_test_bed_folder_is_read_plausibly_or_refused_naming_the_file(case):
     with tempfile.TemporaryDirectory() as tmp, time_limit():
         folder = Path(tmp)
