@@ -394,10 +394,19 @@ def main(argv: list[str] | None = None) -> int:
     effects = args.effects.split(",")
     rng = np.random.default_rng(base)
     vehicles = args.vehicles.split(",") if args.vehicles else [None]
+    unknown = sorted(set(effects) - set(GENERATED))
+    if unknown:
+        parser.error(f"--effects: cannot hide {unknown}; the generator hides {GENERATED}")
+    unknown = sorted(set(vehicles) - {None, *HIDDEN_ON["none"]})
+    if unknown:
+        parser.error(f"--vehicles: unknown {unknown}; use {', '.join(HIDDEN_ON['none'])}")
     jobs = []
     for v in vehicles:
         # every effect hidden on the vehicle equally often (clean logs included), random order
         mine = [e for e in effects if v is None or v in HIDDEN_ON[e]]
+        if not mine:
+            parser.error(f"--effects {args.effects}: none is hidden on {v} "
+                         f"(see slipenv.diagnose.synth.KINDS)")
         draws = [mine[i % len(mine)] for i in range(args.n)]
         rng.shuffle(draws)
         jobs += [(base * 1000 + len(jobs) + i, e, args.duration, v) for i, e in enumerate(draws)]
