@@ -16,10 +16,16 @@
    at least 50 %); and the same with only what the session determines for arcs applied (a
    session that turns on the spot determines the distance scale, not the turn scale of arcs).
 7. BorealTC (no ground truth): yaw efficiency per terrain (``slipenv.diagnose.proprio``).
+8. OptiOdom square runs (``--pivots``): where the robot turns on the spot, relative to the
+   OptiTrack body origin (each pivot's logged poses fitted as origin = centre + R(ψ) d: |d|
+   is the origin's offset from the turning centre), and, per half of every square run that
+   drifts more than 3°, the pivot turn scale (logged turn over wheel turn during pivots):
+   whether the two halves of one run agree on the turn, which the single-run test needs.
 
     python benchmarks/real_data.py --out runs/real
     python benchmarks/real_data.py --out runs/real --single     # only step 5 (about 1 minute)
     python benchmarks/real_data.py --out runs/real --sessions   # only step 6
+    python benchmarks/real_data.py --out runs/real --pivots     # only step 8 (seconds)
 """
 
 from __future__ import annotations
@@ -215,11 +221,85 @@ def cross_path(logs, effects: tuple[str, ...]) -> list[tuple]:
     return rows
 
 
+PIVOT_RATIO = 0.9  # |g_R - g_L| / (|g_R| + |g_L|) above this: turning on the spot
+MIN_PIVOT_SAMPLES = 15  # samples of one pivot (0.75 s at 20 Hz)
+MIN_PIVOT_TURN_RAD = np.pi / 3  # a shorter arc leaves the centre and the offset confounded
+
+
+def _wheel_turn(log) -> tuple[np.ndarray, np.ndarray]:
+    """(nominal wheel yaw increment [rad], speed ratio) of each interval."""
+    v = log.meta.data["vehicle"]
+    g = [np.diff(log.signals[f"enc_{w}"]) / v["counts_per_rad"] * v["wheel_radius_m"]
+         for w in log.wheels]
+    return (g[1] - g[0]) / v["track_width_m"], \
+        np.abs(g[1] - g[0]) / np.maximum(np.abs(g[1]) + np.abs(g[0]), 1e-12)
+
+
+def pivot_offsets(log) -> np.ndarray:
+    """Offset d (x, y along and across the body) [m] of the logged origin from the turning
+    centre, one row per pivot of 60° or more: least squares of origin = c + R(ψ) d."""
+    _, ratio = _wheel_turn(log)
+    idx = np.flatnonzero(ratio > PIVOT_RATIO)
+    out = []
+    for run in np.split(idx, np.flatnonzero(np.diff(idx) > 3) + 1):
+        if len(run) < MIN_PIVOT_SAMPLES:
+            continue
+        k = np.arange(run[0], run[-1] + 2)
+        x, y, psi = (log.signals[c][k] for c in ("gt_x", "gt_y", "gt_yaw"))
+        ok = np.isfinite(x) & np.isfinite(y) & np.isfinite(psi)
+        if ok.sum() < MIN_PIVOT_SAMPLES or np.ptp(np.unwrap(psi[ok])) < MIN_PIVOT_TURN_RAD:
+            continue
+        c, s = np.cos(psi[ok]), np.sin(psi[ok])
+        one, zero = np.ones(ok.sum()), np.zeros(ok.sum())
+        a = np.vstack([np.column_stack([one, zero, c, -s]), np.column_stack([zero, one, s, c])])
+        sol, *_ = np.linalg.lstsq(a, np.concatenate([x[ok], y[ok]]), rcond=None)
+        out.append(sol[2:])
+    return np.array(out).reshape(-1, 2)
+
+
+def pivot_turn_scales(log) -> tuple[float, float]:
+    """Logged turn over nominal wheel turn during pivots, in each half of the run."""
+    dpsi_wheels, ratio = _wheel_turn(log)
+    dpsi = np.diff(np.unwrap(log.signals["gt_yaw"]))
+    first = np.arange(dpsi.size) < dpsi.size // 2
+    out = []
+    for half in (first, ~first):
+        m = half & (ratio > PIVOT_RATIO) & np.isfinite(dpsi)
+        out.append(float(dpsi[m].sum() / dpsi_wheels[m].sum()))
+    return out[0], out[1]
+
+
+def pivots(logs) -> None:
+    """Step 8: the pivot-centre offsets per square session and the per-half turn scales."""
+    squares = [log for log in logs if log.meta.data["optiodom"]["path_type"] == "square"]
+    print("\n| square session | pivots | origin offset from the turning centre [mm] |"
+          "\n|---|---|---|")
+    by_session = defaultdict(list)
+    for log in squares:
+        by_session[log.meta.data["optiodom"]["session"]].append(pivot_offsets(log))
+    for name, parts in sorted(by_session.items()):
+        d = 1e3 * np.concatenate(parts)
+        print(f"| {name} | {len(d)} | along {d[:, 0].mean():+.1f} ± {d[:, 0].std():.1f}, "
+              f"across {d[:, 1].mean():+.1f} ± {d[:, 1].std():.1f} |")
+    print("\n| square run (drift > 3°) | nominal heading drift [°] | pivot turn scale, "
+          "first half | second half | difference |\n|---|---|---|---|---|")
+    for log in squares:
+        i = log.meta.data["optiodom"]
+        drift = whole_run(log, {})[0]
+        if abs(drift) <= DRIFT_DEG:
+            continue
+        a, b = pivot_turn_scales(log)
+        print(f"| {i['session']} run {i['run']} | {drift:+.1f} | {a:.4f} | {b:.4f} | "
+              f"{100 * abs(a - b):.2f} % |")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", default="runs/real", help="folder for the converted logs")
     parser.add_argument("--single", action="store_true", help="only the single-run table")
+    parser.add_argument("--pivots", action="store_true",
+                        help="only the square runs' pivot-turn measurements")
     parser.add_argument("--sessions", action="store_true",
                         help="only the whole-session models on other sessions' circle runs")
     args = parser.parse_args(argv)
@@ -231,6 +311,9 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.sessions:
         session_models(logs)
+        return 0
+    if args.pivots:
+        pivots(logs)
         return 0
     report, _ = diagnose(logs, str(out / "optiodom"))
     (out / "optiodom_diagnosis.json").write_text(json.dumps(report, indent=2, default=float))
