@@ -153,6 +153,7 @@ class SlipEnvConfig:
         if isinstance(self.path, str):
             _check_names(f"path_kwargs of path {self.path!r}", self.path_kwargs,
                          _path_parameters(self.path))
+            _check_path_values(self.path, self.path_kwargs)
         if not isinstance(self.estimator, str):
             raise ValueError(f"estimator must be an estimator name, got {self.estimator!r}")
         _check_options("estimator_kwargs", self.estimator_kwargs)
@@ -403,6 +404,14 @@ def _path_type():
     from slipenv.paths import Path
 
     return Path
+
+
+def _check_path_values(name: str, kwargs: dict) -> None:
+    """Build the path once (well under a millisecond), so that a bad value (a negative
+    speed) is an error of the config, not of the first ``make``."""
+    from slipenv.envs.factory import make_path
+
+    make_path(name, kwargs)
 
 
 def _path_parameters(name: str) -> list[str]:

@@ -145,3 +145,12 @@ def test_a_non_real_action_is_a_value_error(action):
     with pytest.raises(ValueError, match="action"):
         env.unwrapped.step(action)
     env.close()
+
+
+def test_a_bad_path_value_is_an_error_of_the_config_itself():
+    """Not only at ``make``: a config built in code (or by a sweep's grid loader) is checked
+    when it is built, naming the option."""
+    from slipenv.envs.config import SlipEnvConfig
+
+    with pytest.raises(ValueError, match="path_kwargs for path 'circle': radius_m must be > 0"):
+        SlipEnvConfig(path="circle", path_kwargs={"radius_m": -2.0})

@@ -53,6 +53,9 @@ def test_cell_keys_are_stable_across_loads_and_change_with_the_cell(tmp_path):
     (("{start: 3, count: 2}", "[0, 0]"), "seeds repeat"),
     (("max_steps: 50", "max_steps: -1"), "max_steps must be an integer >= 1"),
     (("seeds: {start: 3, count: 2}", ""), "missing required key(s) seeds"),
+    # a path value is checked with the config, before any cell runs (it was a cell's error)
+    (("{max_episode_s: 20}", "{max_episode_s: 20, path_kwargs: {speed_mps: -1}}"),
+     "speed_mps must be > 0"),
 ])
 def test_a_grid_with_a_typo_is_an_error_naming_the_file_and_the_key(tmp_path, edit, needle):
     path = _grid(tmp_path, GOOD.replace(*edit))
