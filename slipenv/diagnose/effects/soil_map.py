@@ -287,7 +287,8 @@ def condense(parameters: dict) -> tuple[dict, list[str]]:
 
 def apply(edit: WorldEdit, p) -> None:
     """Every region (and overlap) with torque slip (c > 0) becomes a turned rectangle of
-    softer soil."""
+    softer soil; a region of negative compliance (the fit's bounds straddle 0) is refused,
+    named."""
     levels = p.levels()
     applicable_to_world(bool(np.all(levels >= 0.0)), EFFECT.name,
                         ", ".join(f"c_region{r}_per_nm" for r in np.flatnonzero(levels < 0.0)),
