@@ -60,6 +60,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from slipenv.diagnose.effects import EFFECTS
+from slipenv.diagnose.kinematic import KINDS
 from slipenv.diagnose.synth import DRAWN, GENERATED
 from slipenv.diagnose.synth import KINDS as HIDDEN_ON
 
@@ -229,9 +230,6 @@ KIND_CASES = {
     "two (radius R +1.5 %, track +2 %)": ((0.1, 0.1015, 0.51), {"rolling_radius", "track_width"}),
     "clean": (None, set()),
 }
-KINDS = ("diff_drive", "skid_steer", "rover4ws")
-
-
 def kind_one(job: tuple[str, str, float, int]) -> dict:
     """Diagnose one kinematic log of a vehicle kind; whether the answer is right."""
     from slipenv.diagnose.cli import diagnose
@@ -376,37 +374,38 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--lengths", default="60,120,300",
                         help="comma-separated log lengths [s] of --kinds")
     args = parser.parse_args(argv)
+    # every input checked before any long work starts
+    soil_kinds = args.soil_kinds.split(",")
+    unknown = sorted(set(soil_kinds) - set(KINDS))
+    if unknown:
+        parser.error(f"--soil-kinds: unknown kind(s) {unknown}; use {', '.join(KINDS)}")
+    effects = args.effects.split(",")
+    unknown = sorted(set(effects) - set(GENERATED))
+    if unknown:
+        parser.error(f"--effects: cannot hide {unknown}; the generator hides {GENERATED}")
+    vehicles = args.vehicles.split(",") if args.vehicles else [None]
+    unknown = sorted(set(vehicles) - {None, *HIDDEN_ON["none"]})
+    if unknown:
+        parser.error(f"--vehicles: unknown {unknown}; use {', '.join(HIDDEN_ON['none'])}")
+    for v in vehicles:
+        if v is not None and not any(v in HIDDEN_ON[e] for e in effects):
+            parser.error(f"--effects {args.effects}: none is hidden on {v} "
+                         f"(see slipenv.diagnose.synth.KINDS)")
     if args.kinds > 0:
         lengths = [float(v) for v in args.lengths.split(",")]
         print(kinds_table(args.kinds, lengths, args.jobs), flush=True)
     if args.soil > 0:
-        soil_kinds = args.soil_kinds.split(",")
-        unknown = sorted(set(soil_kinds) - {"diff_drive", "skid_steer", "rover4ws"})
-        if unknown:
-            parser.error(f"--soil-kinds: unknown kind(s) {unknown}; "
-                         "use diff_drive, skid_steer, rover4ws")
         print(soil_table(args.soil, args.jobs, soil_kinds), flush=True)
     if args.kinematic > 0:
         print(kinematic_table(args.kinematic, args.duration, args.jobs), flush=True)
     if args.n <= 0:
         return 0
     base = args.seed if args.seed is not None else int.from_bytes(os.urandom(3), "little")
-    effects = args.effects.split(",")
     rng = np.random.default_rng(base)
-    vehicles = args.vehicles.split(",") if args.vehicles else [None]
-    unknown = sorted(set(effects) - set(GENERATED))
-    if unknown:
-        parser.error(f"--effects: cannot hide {unknown}; the generator hides {GENERATED}")
-    unknown = sorted(set(vehicles) - {None, *HIDDEN_ON["none"]})
-    if unknown:
-        parser.error(f"--vehicles: unknown {unknown}; use {', '.join(HIDDEN_ON['none'])}")
     jobs = []
     for v in vehicles:
         # every effect hidden on the vehicle equally often (clean logs included), random order
         mine = [e for e in effects if v is None or v in HIDDEN_ON[e]]
-        if not mine:
-            parser.error(f"--effects {args.effects}: none is hidden on {v} "
-                         f"(see slipenv.diagnose.synth.KINDS)")
         draws = [mine[i % len(mine)] for i in range(args.n)]
         rng.shuffle(draws)
         jobs += [(base * 1000 + len(jobs) + i, e, args.duration, v) for i, e in enumerate(draws)]

@@ -44,7 +44,7 @@ from slipenv.diagnose.extension import parse_model
 from slipenv.diagnose.fit import Problem, fit
 from slipenv.diagnose.numbers import determined
 from slipenv.diagnose.replay import build_segments, simulate
-from slipenv.diagnose.segments import cut_spans, log_arrays
+from slipenv.diagnose.segments import cut_spans, log_arrays, wheel_sides
 from slipenv.logs.real import convert_real_datasets
 
 DRIFT_DEG = 3.0  # [deg] a run "visibly drifts" beyond this nominal heading error at its end
@@ -228,11 +228,11 @@ MIN_PIVOT_TURN_RAD = np.pi / 3  # a shorter arc leaves the centre and the offset
 
 def _wheel_turn(log) -> tuple[np.ndarray, np.ndarray]:
     """(nominal wheel yaw increment [rad], speed ratio) of each interval."""
-    v = log.meta.data["vehicle"]
-    g = [np.diff(log.signals[f"enc_{w}"]) / v["counts_per_rad"] * v["wheel_radius_m"]
-         for w in log.wheels]
-    return (g[1] - g[0]) / v["track_width_m"], \
-        np.abs(g[1] - g[0]) / np.maximum(np.abs(g[1]) + np.abs(g[0]), 1e-12)
+    rim = np.diff(log.wheel_angles(), axis=0) * log.meta.wheel_radius_m
+    sides = wheel_sides(list(log.wheels))
+    left, right = rim[:, sides == 0].mean(axis=1), rim[:, sides == 1].mean(axis=1)
+    return (right - left) / log.meta.track_width_m, \
+        np.abs(right - left) / np.maximum(np.abs(right) + np.abs(left), 1e-12)
 
 
 def pivot_offsets(log) -> np.ndarray:

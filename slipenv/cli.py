@@ -200,17 +200,17 @@ def cmd_run(args: argparse.Namespace) -> int:
     from slipenv.evaluation.policies import BUILTIN_POLICIES
     from slipenv.run import completion_text, format_table, plot_episode, run_episode, summarize
 
-    args.controller = BUILTIN_POLICIES.get(args.controller, args.controller)
-    rec = run_episode(args.env_id, seed=args.seed, controller=args.controller,
+    controller = BUILTIN_POLICIES.get(args.controller, args.controller)  # evaluate's names
+    rec = run_episode(args.env_id, seed=args.seed, controller=controller,
                       max_steps=args.max_steps, progress=not args.quiet)
     stats = summarize(rec)
-    print(format_table(stats, f"{args.env_id}  seed {args.seed}  controller {args.controller}"))
+    print(format_table(stats, f"{args.env_id}  seed {args.seed}  controller {controller}"))
     print(completion_text(rec))
     png = plot_episode(rec, out_dir / "trajectory.png")
     print(f"trajectory plot: {png}")
     if json_path is not None:
         _write_json(json_path, {"env_id": args.env_id, "seed": args.seed,
-                                "controller": args.controller, "metrics": stats,
+                                "controller": controller, "metrics": stats,
                                 "success": rec.success, "end_reason": rec.end_reason})
         print(f"metrics: {json_path}")
     return 0

@@ -39,9 +39,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from slipenv.diagnose.regions import to_map
 from slipenv.logs.log import Log
 from slipenv.logs.meta import LogMeta
+from slipenv.terramechanics.soil_map import Circle, Rectangle
 
 ROUTES = ("mixed", "circle", "field")
 KINDS = ("diff_drive", "skid_steer", "rover4ws")
@@ -71,11 +71,8 @@ class SoilRegion:
             raise ValueError("SoilRegion: needs x1_m > x0_m and y1_m > y0_m")
 
     def contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        centre = np.array([0.5 * (self.x0_m + self.x1_m), 0.5 * (self.y0_m + self.y1_m)])
-        # the point in the rectangle's own axes
-        u, v = np.moveaxis(to_map(np.stack([x, y], axis=-1) - centre, self.angle_rad)
-                           + centre, -1, 0)
-        return (u >= self.x0_m) & (u < self.x1_m) & (v >= self.y0_m) & (v < self.y1_m)
+        shape = Rectangle(self.x0_m, self.y0_m, self.x1_m, self.y1_m, self.angle_rad)
+        return shape.signed_distance_m(x, y) < 0.0
 
 
 @dataclass(frozen=True)
@@ -95,7 +92,8 @@ class SoilDisc:
             raise ValueError("SoilDisc: needs radius_m > 0")
 
     def contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        return np.hypot(x - self.center_x_m, y - self.center_y_m) < self.radius_m
+        shape = Circle(self.center_x_m, self.center_y_m, self.radius_m)
+        return shape.signed_distance_m(x, y) < 0.0
 
 
 @dataclass(frozen=True)

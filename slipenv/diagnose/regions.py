@@ -65,10 +65,11 @@ class Quadratic:
 
     @classmethod
     def from_residuals(cls, residuals, rows: np.ndarray, n_intervals: int, scale: float,
-                       uv: np.ndarray) -> Quadratic:
+                       uv: np.ndarray, r0: np.ndarray | None = None) -> Quadratic:
         """``residuals(j, c)``: the flat training residuals with compliance ``c`` on interval
-        ``j`` of every segment (``c = 0``: none); ``rows``: the segment of each residual."""
-        r0 = residuals(0, 0.0)
+        ``j`` of every segment (``c = 0``: none); ``rows``: the segment of each residual;
+        ``r0``: the residuals without compliance, when the caller has them."""
+        r0 = residuals(0, 0.0) if r0 is None else r0
         d = np.column_stack([(residuals(j, scale) - r0) / scale for j in range(n_intervals)])
         s_count = uv.shape[0]
         g = np.zeros((s_count, n_intervals, n_intervals))

@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
+from slipenv.contracts.constants import G_MPS2
 from slipenv.diagnose import apply_model, synth
 from slipenv.diagnose.slip_law import ScaledSlip
-from slipenv.envs.factory import make_vehicle
-from slipenv.terramechanics.soil_map import PatchSoilMap
+from slipenv.envs.factory import make_force_model, make_soil_map, make_vehicle
 
 from .conftest import FUZZ, time_limit
 
@@ -88,10 +89,13 @@ def test_a_report_applies_to_a_world_that_can_run_or_is_refused_naming_it(case):
         assert math.isfinite(value), (name, value)
         if name.endswith("_scale"):
             assert value > 0.0, (name, value)
+    # the world runs: its force law, on its soil wherever the map puts it, gives finite
+    # forces over slips both ways (the vehicle's and the soils' own checks ran when built)
     spec = make_vehicle(config.vehicle)
-    assert math.isfinite(spec.track_width_m) and spec.track_width_m > 0.0
-    for wheel in spec.wheels:
-        assert math.isfinite(wheel.radius_m) and wheel.radius_m > 0.0, wheel
-    if isinstance(config.soil_map, PatchSoilMap):
-        for _, soil in config.soil_map.patches:
-            assert soil.shear_modulus_m > 0.0 and soil.c_x_n >= 0.0, soil
+    model = make_force_model(config.force_model, spec, config.force_model_kwargs)
+    x, y = (g.ravel() for g in np.meshgrid(np.linspace(-5.0, 5.0, 11),
+                                           np.linspace(-5.0, 5.0, 11)))
+    soil = make_soil_map(config.soil, config.soil_map).params_at(x, y)
+    load = np.full(x.size, spec.mass_kg * G_MPS2 / len(spec.wheels))
+    fx, fy = model(np.linspace(-0.5, 0.5, x.size), np.linspace(0.3, -0.3, x.size), load, soil)
+    assert np.all(np.isfinite(fx)) and np.all(np.isfinite(fy))

@@ -214,7 +214,7 @@ def start(ctx: StartContext) -> list:
     def residuals(j: int, c: float) -> np.ndarray:
         return ctx.residuals({**ctx.model, EFFECT.name: _Probe(*spans[j], c)})
 
-    world = regions.Quadratic.from_residuals(residuals, rows, len(spans), scale, centres)
+    world = regions.Quadratic.from_residuals(residuals, rows, len(spans), scale, centres, r0)
 
     def frame(angle: float) -> tuple[regions.Quadratic, regions.Rect]:
         q = dataclasses.replace(world, uv=regions.to_map(centres, angle))
