@@ -1,9 +1,10 @@
 """Regions of softer soil with continuous edges, fitted on a per-interval quadratic.
 
-A soil map's regions are unions of rectangles in a map frame (turned to fit the ground; the
-caller chooses the angle): each edge may sit anywhere, not on a grid, so a region follows a
-field's edge instead of mixing the soft end of a lane with the firm turn beyond it in one
-cell.
+A soil map's regions are unions of shapes — rectangles and discs — in a map frame (turned to
+fit the ground; the caller chooses the angle): each edge, centre and radius may sit anywhere,
+not on a grid, so a region follows a field's edge instead of mixing the soft end of a lane
+with the firm turn beyond it in one cell, and a round patch (a puddle, a wet hollow) is one
+disc instead of a staircase of rectangles.
 
 **The quadratic.** Torque slip s = c(x, y) T (Lindgren Eq. 24) enters the replay per interval
 and the segments are replayed apart, so to first order the training cost of any per-interval
@@ -17,16 +18,19 @@ caller may let runs of intervals share a compliance, and pass the runs as "inter
 map is then scored without replaying: its compliance at the intervals' midpoints goes into
 the quadratic.
 
-**The search.** A region is a union of rectangles (an L-shaped field is two; a disc a few);
-regions add where they overlap. For regions U_r (indicators over the intervals) and their
-compliances c, the cost is rr + 2 hᵀc + cᵀ A c with A_rl = Σ U_rᵀ G U_l and h_r = Σ bᵀ U_r,
-minimised by c = -A⁻¹h. Moving one edge of one rectangle adds or removes intervals in the
-order of their coordinate, so A and h for *every* position of that edge come from cumulative
-sums over that order (:func:`scan_edge`, exact, one pass); the edge goes to the best, halfway
-between the data points on either side (the cut with the widest margin). Coordinate descent
-over the edges, each new rectangle (a new region or part of one) seeded at the best cell of a
-coarse grid, gives layouts of 1, 2, … rectangles; how many is chosen on held-out data by the
-caller.
+**The search.** A region is a union of shapes (an L-shaped field is two rectangles; a round
+patch one disc); regions add where they overlap. For regions U_r (indicators over the
+intervals) and their compliances c, the cost is rr + 2 hᵀc + cᵀ A c with A_rl = Σ U_rᵀ G U_l
+and h_r = Σ bᵀ U_r, minimised by c = -A⁻¹h. Moving one edge of one rectangle adds or removes
+intervals in the order of their coordinate, so A and h for *every* position of that edge come
+from cumulative sums over that order (:func:`scan_edge`, exact, one pass); the edge goes to
+the best, halfway between the data points on either side (the cut with the widest margin). A
+disc's radius adds intervals in the order of their distance from its centre, so it is scanned
+the same way (:func:`scan_radius`); its centre moves by steps halved down to the map's
+resolution, the radius rescanned at each. Coordinate descent over the edges and discs, each
+new shape (a new region or part of one; the better of a rectangle and a disc) seeded at the
+best cells of a coarse grid, gives layouts of 1, 2, … shapes; how many is chosen on held-out
+data by the caller.
 """
 
 from __future__ import annotations
@@ -37,10 +41,16 @@ import numpy as np
 
 _SEED_CELLS = 8  # cells per side of the coarse grid a new region is seeded from
 _SEEDS = 3  # best seed cells each descended from
+_DISC_SEEDS = 1  # of them, the cells a disc is descended from
 _SWEEPS = 8  # most passes of coordinate descent over the edges
 _TOL = 1e-9  # relative cost fall that counts as progress
+_DISC_MOVES = 24  # most centre moves of a disc per descent
+_RESOLUTION = 0.002  # smallest centre step of a disc, as a fraction of the map's size
+_QUICK_RESOLUTION: float | None = 0.02  # the same in a quick search (None: not moved)
+_POLISH_STEPS = 8  # a disc already placed moves from this many smallest steps
 
 Rect = tuple[float, float, float, float]  # (u0, v0, u1, v1) in the map frame [m]
+RECT, DISC = 0, 1  # shape kinds: the rectangle (u0, v0, u1, v1); the disc inscribed in it
 
 
 @dataclass(frozen=True)
@@ -82,14 +92,15 @@ class Quadratic:
             g[s], b[s], rr[s] = d[m].T @ d[m], d[m].T @ r0[m], r0[m] @ r0[m]
         return cls(g, b, rr, uv)
 
-    def inside(self, rect: Rect) -> np.ndarray:
-        """:func:`inside` of the midpoints, remembered (a search asks for the same rectangles
+    def inside(self, rect: Rect, kind: int = RECT) -> np.ndarray:
+        """:func:`inside` of the midpoints, remembered (a search asks for the same shapes
         again and again)."""
-        found = self._masks.get(rect)
+        key = (rect, kind)
+        found = self._masks.get(key)
         if found is None:
             if len(self._masks) > 4096:
                 self._masks.clear()
-            found = self._masks[rect] = inside(self.uv, rect)
+            found = self._masks[key] = inside(self.uv, rect, kind)
         return found
 
     def take(self, index: np.ndarray) -> Quadratic:
@@ -102,19 +113,43 @@ class Quadratic:
             np.einsum("sj,sjk,sk->s", c, self.G, c)
 
 
-def inside(uv: np.ndarray, rect: Rect) -> np.ndarray:
-    """Indicator (float) of the points ``uv`` (…, 2) in ``rect``: u0 <= u < u1, v0 <= v < v1."""
+def inside(uv: np.ndarray, rect: Rect, kind: int = RECT) -> np.ndarray:
+    """Indicator (float) of the points ``uv`` (…, 2) in a shape: for a rectangle u0 <= u < u1,
+    v0 <= v < v1; for a disc (the one inscribed in the square ``rect``) closer to the centre
+    than the radius."""
     u, v = uv[..., 0], uv[..., 1]
+    if kind == DISC:
+        (cu, cv), radius = disc_of(rect)
+        return ((u - cu) ** 2 + (v - cv) ** 2 < radius * radius).astype(float)
     return ((u >= rect[0]) & (u < rect[2]) & (v >= rect[1]) & (v < rect[3])).astype(float)
+
+
+def disc_of(rect: Rect) -> tuple[tuple[float, float], float]:
+    """Centre (u, v) and radius [m] of the disc inscribed in the square ``rect``."""
+    return (0.5 * (rect[0] + rect[2]), 0.5 * (rect[1] + rect[3])), 0.5 * (rect[2] - rect[0])
+
+
+def disc(centre: tuple[float, float], radius: float) -> Rect:
+    """The square a disc is inscribed in (the disc's shape in a :class:`Layout`)."""
+    return (centre[0] - radius, centre[1] - radius, centre[0] + radius, centre[1] + radius)
 
 
 @dataclass(frozen=True)
 class Layout:
-    """Rectangles (u0, v0, u1, v1) in the map frame [m] and the region each belongs to; a
-    region is the union of its rectangles, regions add where they overlap."""
+    """Shapes (u0, v0, u1, v1) in the map frame [m], the region each belongs to and its kind
+    (``RECT``, or ``DISC``: the disc inscribed in the square; all rectangles when ``kinds``
+    is empty); a region is the union of its shapes, regions add where they overlap."""
 
     rects: tuple[Rect, ...] = ()
     labels: tuple[int, ...] = ()
+    kinds: tuple[int, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not self.kinds:
+            object.__setattr__(self, "kinds", (RECT,) * len(self.rects))
+        if not len(self.rects) == len(self.labels) == len(self.kinds):
+            raise ValueError(f"Layout: {len(self.rects)} shapes, {len(self.labels)} labels and "
+                             f"{len(self.kinds)} kinds")
 
     @property
     def count(self) -> int:
@@ -127,20 +162,21 @@ class Layout:
         if isinstance(where, Quadratic):
             shape, mask = where.uv.shape[:-1], where.inside
         else:
-            shape, mask = where.shape[:-1], lambda rect: inside(where, rect)
+            shape, mask = where.shape[:-1], lambda rect, kind: inside(where, rect, kind)
         out = np.zeros((self.count, *shape))
-        for k, (rect, label) in enumerate(zip(self.rects, self.labels, strict=True)):
+        for k, (rect, label, kind) in enumerate(zip(self.rects, self.labels, self.kinds,
+                                                    strict=True)):
             if k != skip:
-                out[label] = np.maximum(out[label], mask(rect))
+                out[label] = np.maximum(out[label], mask(rect, kind))
         return out
 
     def with_rect(self, k: int, rect: Rect) -> Layout:
         rects = list(self.rects)
         rects[k] = rect
-        return Layout(tuple(rects), self.labels)
+        return Layout(tuple(rects), self.labels, self.kinds)
 
-    def added(self, rect: Rect, label: int) -> Layout:
-        return Layout((*self.rects, rect), (*self.labels, label))
+    def added(self, rect: Rect, label: int, kind: int = RECT) -> Layout:
+        return Layout((*self.rects, rect), (*self.labels, label), (*self.kinds, kind))
 
 
 def compliance(uv: np.ndarray, layout: Layout, levels: np.ndarray) -> np.ndarray:
@@ -188,18 +224,54 @@ def scan_edge(q: Quadratic, layout: Layout, k: int, edge: int, limits: Rect,
     or None when no cut leaves every level positive (softer ground only). ``others``: the
     regions without rectangle k (the same for its four edges), computed when not given."""
     axis, lower = edge % 2, edge < 2
-    rect, region = layout.rects[k], layout.labels[k]
-    # region's other rectangles, and the other regions
+    rect = layout.rects[k]
     others = _Normal.of(q, layout, skip=k) if others is None else others
-    masks, gm, a0, h0 = others.masks, others.gm, others.a, others.h
     held = list(rect)
     held[edge] = limits[edge]  # the scanned edge open to the map's limit
-    eligible = (inside(q.uv, tuple(held)) > 0) & (masks[region] == 0)  # type: ignore[arg-type]
-    coord = q.uv[..., axis][eligible]
+    eligible = (inside(q.uv, tuple(held)) > 0) & (others.masks[layout.labels[k]] == 0)  # type: ignore[arg-type]
+    key = -q.uv[..., axis] if lower else q.uv[..., axis]
+    found = _scan(q, layout.labels[k], eligible, key, others)
+    if found is None:
+        return None
+    cut, levels, cost = found
+    out = list(rect)
+    out[edge] = limits[edge] if cut is None else (-cut if lower else cut)
+    return layout.with_rect(k, tuple(out)), levels, cost  # type: ignore[arg-type]
+
+
+def scan_radius(q: Quadratic, layout: Layout, k: int, centre: tuple[float, float],
+                limits: Rect, others: _Normal | None = None
+                ) -> tuple[Layout, np.ndarray, float] | None:
+    """The best radius of disc ``k`` moved to ``centre``, the others held, over every radius
+    between the distances of data points from the centre (as :func:`scan_edge`)."""
+    others = _Normal.of(q, layout, skip=k) if others is None else others
+    eligible = others.masks[layout.labels[k]] == 0
+    key = np.hypot(q.uv[..., 0] - centre[0], q.uv[..., 1] - centre[1])
+    found = _scan(q, layout.labels[k], eligible, key, others)
+    if found is None:
+        return None
+    cut, levels, cost = found
+    if cut is None:  # every point: a disc reaching past the farthest
+        cut = float(key[eligible].max()) + _RESOLUTION * _size(limits)
+    return layout.with_rect(k, disc(centre, cut)), levels, cost
+
+
+def _size(limits: Rect) -> float:
+    return max(limits[2] - limits[0], limits[3] - limits[1])
+
+
+def _scan(q: Quadratic, region: int, eligible: np.ndarray, key: np.ndarray, others: _Normal
+          ) -> tuple[float | None, np.ndarray, float] | None:
+    """The best set of the ``eligible`` intervals with ``key`` below a cut added to
+    ``region`` (the others held as in ``others``): (cut, levels, cost), the cut halfway
+    between two distinct keys (None: past the last), or None when no cut leaves every level
+    positive."""
+    gm, a0, h0 = others.gm, others.a, others.h
+    coord = key[eligible]
     n = coord.size
     if n == 0:
         return None
-    order = np.argsort(-coord if lower else coord, kind="stable")
+    order = np.argsort(coord, kind="stable")
     where = np.nonzero(eligible)
     rank = np.full(eligible.shape, -1)
     rank[where[0][order], where[1][order]] = np.arange(n)
@@ -231,20 +303,56 @@ def scan_edge(q: Quadratic, layout: Layout, k: int, edge: int, limits: Rect,
     if not np.any(valid):
         return None
     m = int(np.argmin(np.where(valid, cost, np.inf)))
-    out = list(rect)
-    out[edge] = float(0.5 * (sorted_coord[m] + sorted_coord[m + 1]) if m + 1 < n
-                      else limits[edge])
-    return layout.with_rect(k, tuple(out)), c[m], float(cost[m])  # type: ignore[arg-type]
+    cut = float(0.5 * (sorted_coord[m] + sorted_coord[m + 1])) if m + 1 < n else None
+    return cut, c[m], float(cost[m])
 
 
-def descend(q: Quadratic, layout: Layout, limits: Rect, moving: list[int] | None = None
+def _move_disc(q: Quadratic, layout: Layout, k: int, limits: Rect, others: _Normal,
+               best: tuple[Layout, np.ndarray, float], resolution: float | None = _RESOLUTION,
+               placed: bool = False) -> tuple[Layout, np.ndarray, float]:
+    """Disc ``k``'s radius rescanned and its centre moved by steps of half its radius
+    (``placed``: at most ``_POLISH_STEPS`` smallest steps), halved down to ``resolution`` of
+    the map's size (None: not moved), the radius rescanned at each (``best``: the layout as
+    it is, and its levels and cost)."""
+    centre, radius = disc_of(layout.rects[k])
+    found = scan_radius(q, layout, k, centre, limits, others)
+    if found is not None and found[2] <= best[2]:
+        best = found
+    if resolution is None:
+        return best
+    floor = resolution * _size(limits)
+    step = 0.5 * max(radius, floor)
+    step = min(step, _POLISH_STEPS * floor) if placed else step
+    for _ in range(_DISC_MOVES):
+        if step < floor:
+            break
+        (cu, cv), _r = disc_of(best[0].rects[k])
+        tries = [scan_radius(q, best[0], k, (cu + du, cv + dv), limits, others)
+                 for du, dv in ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step))]
+        better = [t for t in tries if t is not None and t[2] < best[2]]
+        if better:
+            best = min(better, key=lambda t: t[2])
+        else:
+            step /= 2
+    return best
+
+
+def descend(q: Quadratic, layout: Layout, limits: Rect, moving: list[int] | None = None,
+            resolution: float | None = _RESOLUTION, placed: bool = False
             ) -> tuple[Layout, np.ndarray, float]:
-    """Coordinate descent over the edges of rectangles ``moving`` (all by default)."""
+    """Coordinate descent over the edges of rectangles and the centres and radii of discs
+    ``moving`` (all by default; ``resolution`` and ``placed`` as :func:`_move_disc`, every
+    disc placed after the first sweep)."""
     levels, cost = solve(q, layout)
-    for _ in range(_SWEEPS):
+    for sweep in range(_SWEEPS):
         before = cost
         for k in (range(len(layout.rects)) if moving is None else moving):
-            others = _Normal.of(q, layout, skip=k)  # moving k's edges leaves it as it is
+            others = _Normal.of(q, layout, skip=k)  # moving k leaves the others as they are
+            if layout.kinds[k] == DISC:
+                layout, levels, cost = _move_disc(q, layout, k, limits, others,
+                                                  (layout, levels, cost), resolution,
+                                                  placed or sweep > 0)
+                continue
             for edge in range(4):
                 found = scan_edge(q, layout, k, edge, limits, others)
                 if found is not None and found[2] <= cost:
@@ -263,14 +371,16 @@ def limits_of(uv: np.ndarray) -> Rect:
         float(hi[1] + pad[1])
 
 
-def grow(q: Quadratic, limits: Rect, max_rects: int, max_regions: int, quick: bool = False
-         ) -> list[tuple[Layout, np.ndarray, float]]:
-    """Greedy layouts: for 1 … ``max_rects`` rectangles, a new rectangle — a new region
-    (up to ``max_regions``) or part of one already there — seeded at the coarse-grid cell that
-    lowers the cost most (levels all positive), its edges descended from the best ``_SEEDS``
-    seeds, then every edge polished (``quick``: the best seed only, no polish — a cheaper
-    score of a map frame). Returns (layout, levels, cost) per rectangle count reached (fewer
-    when no rectangle lowers the cost)."""
+def grow(q: Quadratic, limits: Rect, max_rects: int, max_regions: int, quick: bool = False,
+         discs: bool = True) -> list[tuple[Layout, np.ndarray, float]]:
+    """Greedy layouts: for 1 … ``max_rects`` shapes, a new shape — a new region (up to
+    ``max_regions``) or part of one already there — seeded at the coarse-grid cells that
+    lower the cost most (levels all positive): from each of the best ``_SEEDS`` cells a
+    rectangle (its edges descended) and, with ``discs``, from the best ``_DISC_SEEDS`` a disc
+    (its centre and radius), the best of them kept, then every shape polished (``quick``: the
+    best cell only, a disc's centre moved in coarser steps, no polish — a cheaper score of a
+    map frame). Returns (layout, levels, cost) per shape count reached (fewer when no shape
+    lowers the cost)."""
     u = np.linspace(limits[0], limits[2], _SEED_CELLS + 1)
     v = np.linspace(limits[1], limits[3], _SEED_CELLS + 1)
     cells = [(float(u[i]), float(v[j]), float(u[i + 1]), float(v[j + 1]))
@@ -283,12 +393,23 @@ def grow(q: Quadratic, limits: Rect, max_rects: int, max_regions: int, quick: bo
         if not seeds:
             break
         new = len(layout.rects)
-        tries = [descend(q, trial, limits, moving=[new]) for trial in seeds]
+        if discs:  # the disc inscribed in the best seed cell, as the same region (a disc
+            # moves its centre, so it needs fewer seeds than a rectangle)
+            seeds += [Layout(trial.rects[:-1] + (_inscribed(trial.rects[-1]),), trial.labels,
+                             trial.kinds[:-1] + (DISC,)) for trial in seeds[:_DISC_SEEDS]]
+        tries = [descend(q, trial, limits, moving=[new],
+                         resolution=_QUICK_RESOLUTION if quick else _RESOLUTION)
+                 for trial in seeds]
         layout, levels, cost = min(tries, key=lambda t: t[2])
-        if not quick:
-            layout, levels, cost = descend(q, layout, limits)
+        if not quick:  # the new shape placed, the others polished around it
+            layout, levels, cost = descend(q, layout, limits, placed=True)
         path.append((layout, levels, cost))
     return path
+
+
+def _inscribed(cell: Rect) -> Rect:
+    (cu, cv), _r = disc_of(cell)
+    return disc((cu, cv), 0.5 * min(cell[2] - cell[0], cell[3] - cell[1]))
 
 
 def _seeds(q: Quadratic, layout: Layout, cells: list[Rect], max_regions: int,

@@ -22,7 +22,8 @@ slip_dynamics
     Slip as a state: the relaxation-length step, the two soil dampers and the resistance ramp
     (Pacejka §7.2.1; LuGre), plain float functions called by the simulation per wheel.
 soil_map
-    Soils varying over the ground: `UniformSoil`, `PatchSoilMap`, `GridSoilMap`.
+    Soils varying over the ground: `UniformSoil`, `PatchSoilMap`, `GridSoilMap`
+    (regions: `Circle`, `Rectangle`, their `Union` and `Intersection`).
 """
 
 from slipenv.terramechanics.contact import ContactGeometry, slip_ratio
@@ -56,11 +57,13 @@ from slipenv.terramechanics.soil import PARAM_FIELDS, Soil, SoilParams
 from slipenv.terramechanics.soil_map import (
     Circle,
     GridSoilMap,
+    Intersection,
     PatchSoilMap,
     Rectangle,
     Region,
     SoilMap,
     UniformSoil,
+    Union,
 )
 
 __all__ = [
@@ -77,6 +80,7 @@ __all__ = [
     "ContactGeometry",
     "ForceModel",
     "GridSoilMap",
+    "Intersection",
     "JanosiForceModel",
     "LinearSlipForceModel",
     "PatchSoilMap",
@@ -87,6 +91,7 @@ __all__ = [
     "SoilMap",
     "SoilParams",
     "UniformSoil",
+    "Union",
     "critical_damping_ns_per_m",
     "force_model_by_name",
     "lateral_soil_damping_n",

@@ -107,6 +107,43 @@ class Rectangle:
         return outside + np.minimum(np.maximum(qx, qy), 0.0)
 
 
+def _check_regions(combined) -> None:
+    if not combined.regions or not all(isinstance(r, Region) for r in combined.regions):
+        raise ValueError(f"{type(combined).__name__} needs one or more regions, "
+                         f"got {combined.regions!r}")
+
+
+@dataclass(frozen=True)
+class Union:
+    """Points in any of `regions`. Its signed distance is the least of theirs: exact outside
+    and on the boundary's sign everywhere, a bound inside where the regions overlap (so a
+    blend band is exact outside the union; with hard edges only the sign counts)."""
+
+    regions: tuple
+
+    def __post_init__(self) -> None:
+        _check_regions(self)
+
+    def signed_distance_m(self, x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
+        """The least signed distance of the regions [m], negative inside any."""
+        return np.minimum.reduce([r.signed_distance_m(x_m, y_m) for r in self.regions])
+
+
+@dataclass(frozen=True)
+class Intersection:
+    """Points in all of `regions`. Its signed distance is the greatest of theirs: exact on
+    the boundary's sign, a bound elsewhere (with hard edges only the sign counts)."""
+
+    regions: tuple
+
+    def __post_init__(self) -> None:
+        _check_regions(self)
+
+    def signed_distance_m(self, x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
+        """The greatest signed distance of the regions [m], negative inside all."""
+        return np.maximum.reduce([r.signed_distance_m(x_m, y_m) for r in self.regions])
+
+
 _ZERO, _HALF, _ONE, _THREE = (np.asarray(v) for v in (0.0, 0.5, 1.0, 3.0))
 
 

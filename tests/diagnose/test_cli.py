@@ -156,11 +156,13 @@ def test_a_soil_maps_regions_are_shown_one_line_each_not_a_line_per_corner():
     from slipenv.diagnose.cli import summary
     from slipenv.diagnose.effects.soil_map import MAX_RECTS
 
-    # in a frame turned 90 deg: region 0 one rectangle, region 1 two; the rest unused
-    boxes = [(0.0, -2.0, 4.0, 0.0, 0), (1.0, 1.0, 2.0, 3.0, 1), (2.0, 1.0, 3.0, 2.0, 1)]
-    boxes += [(0.0, 0.0, 1.0, 1.0, 0)] * (MAX_RECTS - len(boxes))
+    # in a frame turned 90 deg: region 0 one rectangle, region 1 a rectangle and a disc;
+    # the rest unused
+    boxes = [(0.0, -2.0, 4.0, 0.0, 0, 0), (1.0, 1.0, 2.0, 3.0, 1, 0), (2.0, 1.0, 3.0, 2.0, 1, 1)]
+    boxes += [(0.0, 0.0, 1.0, 1.0, 0, 0)] * (MAX_RECTS - len(boxes))
     corners = {f"map_rect{k}_{e}": [v, 0.0] for k, box in enumerate(boxes)
-               for e, v in zip(("u0_m", "v0_m", "u1_m", "v1_m", "region"), box, strict=True)}
+               for e, v in zip(("u0_m", "v0_m", "u1_m", "v1_m", "region", "shape"), box,
+                               strict=True)}
     params = {"map_angle_rad": [np.pi / 2, 0.0], "map_rects": [3.0, 0.0], **corners,
               "c_region0_per_nm": [2e-3, 1e-4], "c_region1_per_nm": [5e-3, 2e-4],
               "c_region2_per_nm": [0.0, 0.0]}
@@ -170,7 +172,8 @@ def test_a_soil_maps_regions_are_shown_one_line_each_not_a_line_per_corner():
     text = summary(report, 1.0)
     assert "map_rect" not in text and "c_region2" not in text
     assert "c_region1_per_nm = 0.005 ± 0.0002" in text
-    assert "2 region(s) of 3 rectangle(s) turned 90.0 deg" in text
+    assert "2 region(s) of 3 shape(s), rectangles turned 90.0 deg" in text
     # region 0's centre (2, -1) in the map frame is (1, 2) in the world, its size 4 x 2 m
     assert "region 0 (c_region0_per_nm): (1.00, 2.00) m, 4.00 x 2.00 m" in text
-    assert "region 1 (c_region1_per_nm): (-2.00, 1.50) m, 1.00 x 2.00 m; " in text
+    assert "region 1 (c_region1_per_nm): (-2.00, 1.50) m, 1.00 x 2.00 m; " \
+        "disc (-1.50, 2.50) m, radius 0.50 m" in text

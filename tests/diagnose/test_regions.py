@@ -14,15 +14,21 @@ TRUE = regions.Layout(((-3.0, -3.0, -0.4, 0.2), (1.1, 0.7, 3.3, 3.6), (1.1, -2.5
 TRUE_LEVELS = np.array([0.008, 0.005])
 
 
+# region 0 a disc, region 1 an L of two rectangles
+DISC_AND_L = regions.Layout((regions.disc((-1.6, 1.4), 1.7), (0.5, -3.5, 3.5, -1.5),
+                             (2.0, -1.5, 3.5, 1.0)), (0, 1, 1),
+                            (regions.DISC, regions.RECT, regions.RECT))
+
+
 def _linear_world(seed: int = 0, segments: int = 30, intervals: int = 16, rows: int = 12,
-                  noise: float = 0.0):
+                  noise: float = 0.0, true: regions.Layout = TRUE):
     """Segments of ``intervals`` points scattered over a 8 m square, residuals linear in the
     per-interval compliance (r = r0 + D C) with r0 = -D C_true (+ noise): the true map's
     cost is the noise alone."""
     rng = np.random.default_rng(seed)
     uv = rng.uniform(-4.0, 4.0, (segments, intervals, 2))
     d = rng.normal(0.0, 1.0, (segments, rows, intervals))
-    truth = regions.compliance(uv, TRUE, TRUE_LEVELS)
+    truth = regions.compliance(uv, true, TRUE_LEVELS)
     r0 = -np.einsum("srj,sj->sr", d, truth) + noise * rng.normal(size=(segments, rows))
     seg_of_row = np.repeat(np.arange(segments), rows)
 
@@ -42,6 +48,29 @@ def test_the_quadratic_scores_any_map_as_the_residuals_would():
         np.testing.assert_allclose(q.segment_costs(c), exact, rtol=1e-9)
 
 
+def _best_by_solve(q, layout: regions.Layout, k: int, shapes) -> float:
+    """The least cost the plain solve gives with shape ``k`` replaced by each of ``shapes``
+    (those adding something to its region, with every level positive)."""
+    others = layout.masks(q.uv, skip=k)[layout.labels[k]]
+    best = np.inf
+    for shape in shapes:
+        if not np.any((regions.inside(q.uv, shape, layout.kinds[k]) > 0) & (others == 0)):
+            continue  # the shape adds nothing to its region
+        levels, cost = regions.solve(q, layout.with_rect(k, shape))
+        if np.all(levels > 0):
+            best = min(best, cost)
+    return best
+
+
+def _assert_scan_found(q, scanned, best: float) -> None:
+    """A scan's (layout, levels, cost) is the brute-force best and its own solve."""
+    found, levels, cost = scanned
+    assert cost == pytest.approx(best, rel=1e-9)
+    again, again_cost = regions.solve(q, found)
+    np.testing.assert_allclose(again, levels, rtol=1e-9)
+    assert again_cost == pytest.approx(cost, rel=1e-9)
+
+
 def test_an_edge_scan_finds_the_best_cut_that_brute_force_finds():
     q, *_ = _linear_world(noise=0.05)
     limits = regions.limits_of(q.uv)
@@ -50,26 +79,59 @@ def test_an_edge_scan_finds_the_best_cut_that_brute_force_finds():
                              (1.0, -1.0, 2.5, 2.0)), (0, 1, 1))
     for k in range(3):
         for edge in range(4):
-            found, levels, cost = regions.scan_edge(q, layout, k, edge, limits)
             # every cut between two data coordinates, scored by the plain solve
             coords = np.unique(q.uv[..., edge % 2])
-            best = np.inf
+            rects = []
             for cut in np.concatenate([0.5 * (coords[1:] + coords[:-1]), [limits[edge]]]):
                 rect = list(layout.rects[k])
                 rect[edge] = cut
-                if rect[2] <= rect[0] or rect[3] <= rect[1]:
-                    continue
-                trial = layout.with_rect(k, tuple(rect))
-                others = layout.masks(q.uv, skip=k)[layout.labels[k]]
-                if not np.any((regions.inside(q.uv, trial.rects[k]) > 0) & (others == 0)):
-                    continue  # the rectangle adds nothing to its region
-                lv, c = regions.solve(q, trial)
-                if np.all(lv > 0):
-                    best = min(best, c)
-            assert cost == pytest.approx(best, rel=1e-9), (k, edge)
-            again, again_cost = regions.solve(q, found)
-            np.testing.assert_allclose(again, levels, rtol=1e-9)
-            assert again_cost == pytest.approx(cost, rel=1e-9)
+                if rect[2] > rect[0] and rect[3] > rect[1]:
+                    rects.append(tuple(rect))
+            _assert_scan_found(q, regions.scan_edge(q, layout, k, edge, limits),
+                               _best_by_solve(q, layout, k, rects))
+
+
+def test_a_radius_scan_finds_the_best_radius_that_brute_force_finds():
+    q, *_ = _linear_world(noise=0.05, true=DISC_AND_L)
+    limits = regions.limits_of(q.uv)
+    layout = regions.Layout((regions.disc((-1.0, 1.0), 1.0), (0.5, -3.0, 3.0, -1.0),
+                             regions.disc((2.5, -2.0), 1.0)), (0, 1, 1),
+                            (regions.DISC, regions.RECT, regions.DISC))
+    for k, centre in ((0, (-1.5, 1.5)), (0, (0.3, -0.2)), (2, (2.0, 0.0))):
+        scanned = regions.scan_radius(q, layout, k, centre, limits)
+        assert scanned[0].kinds[k] == regions.DISC
+        np.testing.assert_allclose(regions.disc_of(scanned[0].rects[k])[0], centre, atol=1e-12)
+        # every radius between two data distances, scored by the plain solve
+        dist = np.unique(np.hypot(q.uv[..., 0] - centre[0], q.uv[..., 1] - centre[1]))
+        radii = np.concatenate([0.5 * (dist[1:] + dist[:-1]), [dist[-1] + 1.0]])
+        _assert_scan_found(q, scanned, _best_by_solve(q, layout, k,
+                                                      [regions.disc(centre, r) for r in radii]))
+
+
+def test_a_disc_and_an_l_shaped_region_are_found_the_disc_as_one_disc():
+    q, *_ = _linear_world(segments=80, true=DISC_AND_L)
+    path = regions.grow(q, regions.limits_of(q.uv), 4, 3)
+    layout, levels, cost = path[2]  # three shapes
+    assert cost < 1e-6 * q.rr.sum()  # every interval on the right side of every edge
+    assert sorted(layout.kinds) == [regions.RECT, regions.RECT, regions.DISC]
+    (centre, radius), = [regions.disc_of(r) for r, kind in zip(layout.rects, layout.kinds,
+                                                               strict=True)
+                         if kind == regions.DISC]
+    spacing = 8.0 / np.sqrt(q.uv[..., 0].size)  # the data's spacing
+    assert np.hypot(centre[0] + 1.6, centre[1] - 1.4) < 0.5 * spacing
+    assert abs(radius - 1.7) < 0.5 * spacing
+    # the fitted map matches the truth everywhere but within the data spacing of an edge (the
+    # L may come as two regions of one compliance: the same ground)
+    grid = np.stack(np.meshgrid(np.linspace(-4, 4, 161), np.linspace(-4, 4, 161)), axis=-1)
+    true = regions.compliance(grid, DISC_AND_L, TRUE_LEVELS)
+    edges = np.abs(np.hypot(grid[..., 0] + 1.6, grid[..., 1] - 1.4) - 1.7) < 2 * spacing
+    for u0, v0, u1, v1 in DISC_AND_L.rects[1:]:
+        for a, axis in ((u0, 0), (u1, 0), (v0, 1), (v1, 1)):
+            edges |= np.abs(grid[..., axis] - a) < 2 * spacing
+    fitted = regions.compliance(grid, layout, levels)
+    assert np.allclose(fitted[~edges], true[~edges], atol=0.02 * TRUE_LEVELS.max())
+    # rectangles alone leave a staircase's error with as many shapes
+    assert regions.grow(q, regions.limits_of(q.uv), 4, 3, discs=False)[2][2] > 0.03 * q.rr.sum()
 
 
 def test_a_rectangle_and_an_l_shaped_region_are_found_with_their_compliances():

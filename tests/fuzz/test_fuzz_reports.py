@@ -39,9 +39,9 @@ BASE = {
                    "k_s_left_nm": 300.0, "k_s_right_nm": 300.0},
     "soil_map": {"map_angle_rad": 0.3, "map_rects": 2.0,
                  "map_rect0_u0_m": 0.0, "map_rect0_v0_m": -1.0, "map_rect0_u1_m": 2.0,
-                 "map_rect0_v1_m": 1.0, "map_rect0_region": 0.0,
+                 "map_rect0_v1_m": 1.0, "map_rect0_region": 0.0, "map_rect0_shape": 1.0,
                  "map_rect1_u0_m": -3.0, "map_rect1_v0_m": -1.0, "map_rect1_u1_m": -1.0,
-                 "map_rect1_v1_m": 2.0, "map_rect1_region": 1.0,
+                 "map_rect1_v1_m": 2.0, "map_rect1_region": 1.0, "map_rect1_shape": 0.0,
                  "c_region0_per_nm": 0.002, "c_region1_per_nm": 0.004},
     "gyro_bias": {"gyro_bias_rad_s": 0.01},
 }

@@ -14,11 +14,13 @@ from slipenv.terramechanics import (
     Circle,
     ContactGeometry,
     GridSoilMap,
+    Intersection,
     JanosiForceModel,
     PatchSoilMap,
     Rectangle,
     SoilMap,
     UniformSoil,
+    Union,
 )
 
 BASE, PATCH = LOOSE_SAND.params(), CONCRETE.params()
@@ -56,6 +58,24 @@ def test_a_turned_rectangle_measures_distance_in_its_own_axes():
     u, v = 2.0 + c * (x - 2.0) + s * (y - 1.0), 1.0 - s * (x - 2.0) + c * (y - 1.0)
     np.testing.assert_allclose(turned.signed_distance_m(x, y),
                                Rectangle(0.0, 0.0, 4.0, 2.0).signed_distance_m(u, v), atol=1e-12)
+
+
+def test_a_union_and_an_intersection_hold_the_points_of_any_and_of_all():
+    disc, box = Circle(0.0, 0.0, 1.0), Rectangle(0.5, -0.5, 2.5, 0.5)
+    x, y = np.random.default_rng(1).uniform(-2.0, 3.0, (2, 2000))
+    in_disc = disc.signed_distance_m(x, y) < 0
+    in_box = box.signed_distance_m(x, y) < 0
+    assert np.array_equal(Union((disc, box)).signed_distance_m(x, y) < 0, in_disc | in_box)
+    assert np.array_equal(Intersection((disc, box)).signed_distance_m(x, y) < 0,
+                          in_disc & in_box)
+    assert 0 < np.sum(in_disc & in_box) < np.sum(in_disc | in_box)  # the two overlap
+    # outside the union its distance is the exact distance to the nearer shape
+    np.testing.assert_allclose(Union((disc, box)).signed_distance_m(np.array([4.0]),
+                                                                    np.array([0.0])), [1.5])
+    with pytest.raises(ValueError, match="one or more regions"):
+        Union(())
+    with pytest.raises(ValueError, match="one or more regions"):
+        Intersection((disc, "box"))
 
 
 def test_degenerate_rectangle_and_circle_raise():

@@ -16,7 +16,7 @@ module                    parameters    meaning
 ``slope_side_slip``       β per roll    slip angle driven by roll on a side slope (Yamauchi)
 ``combined_slip``         s_x0, k_β, β0 longitudinal slip grows with slip angle (Reina Eq. 12)
 ``soil_patch``            disc, per side a disc of softer soil
-``soil_map``              rectangles    regions with continuous edges, each its own torque slip
+``soil_map``              shapes        regions of rectangles and discs, each its own torque slip
 ``gyro_bias``             b             constant offset in the yaw-rate sensor
 ========================= ============= =====================================================
 """

@@ -1,34 +1,36 @@
 """``soil_map``: soil stiffness that varies in space — a few regions with continuous edges.
 
 The generalisation of ``soil_patch`` (one disc) to several regions of any shape: up to
-``MAX_REGIONS`` regions, each a union of rectangles (``MAX_RECTS`` in all) in a map frame
-turned by ``angle_rad``, each region with its own torque compliance c = 1/k_s [1/(N m)]
-(Lindgren Eq. 24: s = T c, every wheel on that ground); where regions overlap their
-compliances add. An L-shaped field is one region of two rectangles, a disc one of a few.
+``MAX_REGIONS`` regions, each a union of shapes — rectangles and discs, ``MAX_RECTS`` in
+all — in a map frame turned by ``angle_rad``, each region with its own torque compliance
+c = 1/k_s [1/(N m)] (Lindgren Eq. 24: s = T c, every wheel on that ground); where regions
+overlap their compliances add. An L-shaped field is one region of two rectangles, a round
+patch one disc.
 Replay: s_i = c(x, y) T_i (``replay.py`` step 2), c looked up at the interval's ground-truth
 midpoint.
 
 Fitting (:func:`start`, ``slipenv.diagnose.regions``): the residuals' sensitivity to the
-compliance of each run of a few intervals gives a quadratic in which any map is scored
-without replaying; the rectangles' edges are placed anywhere (between data points, not on a
-grid: a grid's cell at a field's edge mixes the soft lane ends with the firm turns beyond
-them), greedily one rectangle at a time. The frame's angle is the one whose map (a quicker
-search: one seed per rectangle, no polish) fits the training data best (every
-``_ANGLE_STEP`` over a quarter turn and the route's main direction, then the step halved
-twice around the best); the number of rectangles is chosen on held-out data: maps found on
-the other training segments are scored on each of ``_K_FOLDS`` interleaved folds, and the
-fewest within ``K_TOLERANCE`` of the best held-out error win. The full fit then refines the
+compliance of each run of a few intervals gives a quadratic in which any map is scored without
+replaying; the rectangles' edges and the discs' centres and radii are placed anywhere (between
+data points, not on a grid: a grid's cell at a field's edge mixes the soft lane ends with the
+firm turns beyond them), greedily one shape at a time. The frame's angle is the one whose map
+(a quicker search: one seed cell per shape, no polish) fits the training data best (every
+``_ANGLE_STEP`` over a quarter turn and the route's main direction, then the step halved twice
+around the best); the number of shapes is chosen on held-out data: maps found on the other
+training segments are scored on each of ``_K_FOLDS`` interleaved folds, and the fewest shapes
+within ``K_TOLERANCE`` of the best held-out error win. The full fit then refines the
 compliances with the layout held (the layout is a model-order choice, not a fitted number).
-Simulation: a ``PatchSoilMap`` of turned rectangles (the cells the edges draw, each with its
-summed compliance) over the base soil. Hidden in the PyBullet tests on request
-(``Hiding.drawn`` False): a field split in two halves of their own softness across the
-route's focus (:func:`draw`), on level differential-drive ground and under the rover on a
-slope.
+Simulation: a ``PatchSoilMap`` over the base soil painting each region (the ``Union`` of its
+turned rectangles and discs), then each overlap of regions (their ``Intersection``) with the
+summed compliance. Hidden in the PyBullet tests on request (``Hiding.drawn`` False): a field
+split in two halves of their own softness across the route's focus (:func:`draw`), on level
+differential-drive ground and under the rover on a slope.
 
-Contract names: ``map_angle_rad``, ``map_rects`` (n), ``map_rect<k>_u0_m`` … ``_v1_m`` and
-``map_rect<k>_region`` (rectangle k's corners in the map frame, u along the angle and v
-across it, and its region; rectangles beyond n unused), ``c_region<r>_per_nm`` (compliance
-of region r; k_s = 1/c).
+Contract names: ``map_angle_rad``, ``map_rects`` (n), ``map_rect<k>_u0_m`` … ``_v1_m``,
+``map_rect<k>_region`` and ``map_rect<k>_shape`` (shape k's corners in the map frame, u
+along the angle and v across it, its region, and 0 for the rectangle or 1 for the disc
+inscribed in it, a square; 0 when left out; shapes beyond n unused),
+``c_region<r>_per_nm`` (compliance of region r; k_s = 1/c).
 """
 
 from __future__ import annotations
@@ -58,16 +60,24 @@ from slipenv.diagnose.effects.base import (
 )
 from slipenv.diagnose.effects.world import WorldEdit
 from slipenv.diagnose.segments import Segments
-from slipenv.terramechanics.soil_map import PatchSoilMap, Rectangle
+from slipenv.terramechanics.soil_map import (
+    Circle,
+    Intersection,
+    PatchSoilMap,
+    Rectangle,
+    Region,
+    Union,
+)
 
 MAX_REGIONS = 3  # regions (each its own stiffness) a map may hold
-MAX_RECTS = 5  # rectangles the regions are made of
+MAX_RECTS = 5  # shapes (rectangles, discs) the regions are made of
 K_TOLERANCE = 0.02  # fewer regions win within this relative held-out error of the best
 _ANGLE_STEP = np.pi / 24  # [rad] first pass of the frame's angle over a quarter turn
 _K_FOLDS = 4  # interleaved folds of the training segments the rectangle count is chosen on
 _RUNS = 20  # most runs of intervals per segment in the search (module doc)
 _EDGES = ("u0_m", "v0_m", "u1_m", "v1_m")
-_RECTS = tuple(f"rect{k}_{e}" for k in range(MAX_RECTS) for e in (*_EDGES, "region"))
+_RECTS = tuple(f"rect{k}_{e}" for k in range(MAX_RECTS)
+               for e in (*_EDGES, "region", "shape"))
 _FIXED = ("angle_rad", "rects", *_RECTS)
 _LEVELS = tuple(f"compliance_{k}_per_nm" for k in range(MAX_REGIONS))
 
@@ -78,8 +88,9 @@ def _make_params() -> type:
                                      frozen=True)
     cls.__module__ = __name__
     cls.__doc__ = ("Soil map parameters: the map frame's angle [rad], the number of "
-                   "rectangles, each one's corners in the map frame [m] and region, each "
-                   "region's torque compliance [1/(N m)].")
+                   "shapes, each one's corners in the map frame [m], region and kind "
+                   "(0 rectangle, 1 the disc inscribed in it), each region's torque "
+                   "compliance [1/(N m)].")
     return cls
 
 
@@ -90,10 +101,19 @@ class _SoilMapTerm(Term):
         finite(self)
         require(1 <= round(self.rects) <= MAX_RECTS, self,  # type: ignore[attr-defined]
                 f"rects must be 1..{MAX_RECTS}")
+        count = int(np.clip(round(self.rects), 1, MAX_RECTS))  # type: ignore[attr-defined]
+        for k in range(count):
+            kind = getattr(self, f"rect{k}_shape")
+            require(kind in (regions.RECT, regions.DISC), self,
+                    f"rect{k}_shape must be 0 (rectangle) or 1 (disc), got {kind}")
         layout = self.layout()
-        for k, (u0, v0, u1, v1) in enumerate(layout.rects):
+        for k, ((u0, v0, u1, v1), kind) in enumerate(zip(layout.rects, layout.kinds,
+                                                         strict=True)):
             require(u1 > u0 and v1 > v0, self,
                     f"rectangle {k} needs u1_m > u0_m and v1_m > v0_m, got {(u0, v0, u1, v1)}")
+            require(kind == regions.RECT or np.isclose(u1 - u0, v1 - v0, rtol=1e-9, atol=0.0),
+                    self, f"disc {k} needs a square (u1_m - u0_m == v1_m - v0_m), got "
+                          f"{(u0, v0, u1, v1)}")
         require(all(0 <= r < MAX_REGIONS for r in layout.labels)
                 and sorted(set(layout.labels)) == list(range(layout.count)), self,
                 f"the rectangles' regions must be 0..{MAX_REGIONS - 1}, each used")
@@ -104,7 +124,8 @@ class _SoilMapTerm(Term):
         rects = tuple(tuple(float(getattr(self, f"rect{k}_{e}")) for e in _EDGES)
                       for k in range(count))
         labels = tuple(int(round(getattr(self, f"rect{k}_region"))) for k in range(count))
-        return regions.Layout(rects, labels)  # type: ignore[arg-type]
+        kinds = tuple(int(getattr(self, f"rect{k}_shape")) for k in range(count))
+        return regions.Layout(rects, labels, kinds)  # type: ignore[arg-type]
 
     @property
     def regions(self) -> int:
@@ -127,27 +148,42 @@ class _SoilMapTerm(Term):
             return None
         return self.compliance_at(pos)[..., None] * seg.torque
 
-    def patches(self) -> list[tuple[Rectangle, float]]:
-        """The map as non-overlapping turned world rectangles with their compliance: the
-        cells of the grid the rectangles' edges draw, each with the summed compliance of the
-        regions holding it (cells with none left out)."""
+    def shapes(self) -> list[tuple[Region, int]]:
+        """Each used shape in the world frame (a turned ``Rectangle`` or a ``Circle``) and
+        its region."""
         angle = float(self.angle_rad)  # type: ignore[attr-defined]
         layout = self.layout()
+        out: list[tuple[Region, int]] = []
+        for rect, label, kind in zip(layout.rects, layout.labels, layout.kinds, strict=True):
+            (cu, cv), radius = regions.disc_of(rect)
+            cx, cy = (float(x) for x in regions.to_map(np.array([cu, cv]), -angle))
+            if kind == regions.DISC:
+                out.append((Circle(cx, cy, radius), label))
+            else:
+                hu, hv = 0.5 * (rect[2] - rect[0]), 0.5 * (rect[3] - rect[1])
+                out.append((Rectangle(cx - hu, cy - hv, cx + hu, cy + hv, angle), label))
+        return out
+
+    def patches(self) -> list[tuple[Region, float]]:
+        """The map as patches to paint in order (``PatchSoilMap``: later on top), each with
+        its compliance: every region (the union of its shapes), then every overlap of two
+        regions, then of three (their intersection), each with the summed compliance of the
+        regions holding it — a point in exactly the regions T is painted last by T itself.
+        Patches of no compliance are left out."""
+        layout = self.layout()
         levels = self.levels(layout.count)
-        us = sorted({r[0] for r in layout.rects} | {r[2] for r in layout.rects})
-        vs = sorted({r[1] for r in layout.rects} | {r[3] for r in layout.rects})
-        out = []
-        for u0, u1 in itertools.pairwise(us):
-            for v0, v1 in itertools.pairwise(vs):
-                mid = np.array([0.5 * (u0 + u1), 0.5 * (v0 + v1)])
-                level = float(regions.compliance(mid, layout, levels))
-                if level == 0.0:
-                    continue
-                centre = regions.to_map(mid, -angle)
-                hu, hv = 0.5 * (u1 - u0), 0.5 * (v1 - v0)
-                out.append((Rectangle(float(centre[0] - hu), float(centre[1] - hv),
-                                      float(centre[0] + hu), float(centre[1] + hv), angle),
-                            level))
+        by_region: dict[int, list[Region]] = {}
+        for shape, label in self.shapes():
+            by_region.setdefault(label, []).append(shape)
+        unions = {r: (s[0] if len(s) == 1 else Union(tuple(s))) for r, s in by_region.items()}
+        out: list[tuple[Region, float]] = []
+        for size in range(1, layout.count + 1):
+            for group in itertools.combinations(sorted(unions), size):
+                level = float(sum(levels[r] for r in group))
+                if level != 0.0:
+                    region = unions[group[0]] if size == 1 else \
+                        Intersection(tuple(unions[r] for r in group))
+                    out.append((region, level))
         return out
 
 
@@ -176,10 +212,11 @@ def _fixed_bound(value: float) -> Bound:
 
 
 def _params(angle: float, layout: regions.Layout, levels: np.ndarray) -> Term:
-    rects = np.zeros((MAX_RECTS, 5))
-    rects[:] = (0.0, 0.0, 1.0, 1.0, 0.0)  # unused rectangles: a unit square, region 0
-    for k, (rect, label) in enumerate(zip(layout.rects, layout.labels, strict=True)):
-        rects[k] = (*rect, label)
+    rects = np.zeros((MAX_RECTS, 6))
+    rects[:] = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0)  # unused shapes: a unit square, region 0
+    for k, (rect, label, kind) in enumerate(zip(layout.rects, layout.labels, layout.kinds,
+                                                strict=True)):
+        rects[k] = (*rect, label, kind)
     lv = np.zeros(MAX_REGIONS)
     lv[:len(levels)] = levels
     return SoilMap(float(angle), float(len(layout.rects)), *map(float, rects.ravel()),
@@ -220,46 +257,59 @@ def start(ctx: StartContext) -> list:
         q = dataclasses.replace(world, uv=regions.to_map(centres, angle))
         return q, regions.limits_of(q.uv)
 
-    def score(angle: float) -> float:  # the training cost of the frame's map (quick search)
-        path = regions.grow(*frame(angle), MAX_RECTS, MAX_REGIONS, quick=True)
-        return path[-1][2] if path else np.inf
-
     moving = np.abs(seg.dphi).sum(axis=-1) > 0
-    angles = [float(a) for a in np.arange(0.0, np.pi / 2, _ANGLE_STEP)]
-    angles.append(regions.main_direction(seg.pos, moving) % (np.pi / 2))
-    scored = {a: score(a) for a in angles}
-    step = _ANGLE_STEP
-    for _ in range(2):  # halve the step twice around the best angle
-        step /= 2
-        best = min(scored, key=scored.__getitem__)
-        scored.update({a: score(a) for a in (best - step, best + step) if a not in scored})
-    angle = min(scored, key=scored.__getitem__)
+    angle = _frame_angle(lambda a: regions.grow(*frame(a), MAX_RECTS, MAX_REGIONS, quick=True),
+                         regions.main_direction(seg.pos, moving))
     q, limits = frame(angle)
     path = regions.grow(q, limits, MAX_RECTS, MAX_REGIONS)
     if not path:
         return []
-    # how many rectangles: maps found on the other folds' segments, scored on each fold's
+    held = _held_out(q, limits, len(path))  # the fewest shapes within K_TOLERANCE of the best
+    layout, levels, _ = path[int(np.flatnonzero(held <= (1 + K_TOLERANCE) * held.min())[0])]
+    return [_params(angle, layout, levels)]
+
+
+def _frame_angle(quick_path, main_direction: float) -> float:
+    """The map frame's angle whose quick map (``quick_path(angle)``, a :func:`regions.grow`
+    path) leaves the least training cost: every ``_ANGLE_STEP`` over a quarter turn and the
+    route's main direction, then the step halved twice around the best."""
+    def score(angle: float) -> float:
+        path = quick_path(angle)
+        return path[-1][2] if path else np.inf
+
+    angles = [float(a) for a in np.arange(0.0, np.pi / 2, _ANGLE_STEP)]
+    angles.append(main_direction % (np.pi / 2))
+    scored = {a: score(a) for a in angles}
+    step = _ANGLE_STEP
+    for _ in range(2):
+        step /= 2
+        best = min(scored, key=scored.__getitem__)
+        scored.update({a: score(a) for a in (best - step, best + step) if a not in scored})
+    return min(scored, key=scored.__getitem__)
+
+
+def _held_out(q: regions.Quadratic, limits: regions.Rect, count: int) -> np.ndarray:
+    """Held-out cost of maps of 1 … ``count`` shapes: found on the other folds' segments,
+    scored on each of ``_K_FOLDS`` interleaved folds'."""
     idx = np.arange(len(q.rr))
-    held = np.zeros(len(path))
+    held = np.zeros(count)
     for fold in range(_K_FOLDS):
         test = idx % _K_FOLDS == fold
         if test.all() or not test.any():
             continue
-        part = regions.grow(q.take(~test), limits, len(path), MAX_REGIONS)
+        part = regions.grow(q.take(~test), limits, count, MAX_REGIONS)
         rest = q.take(test)
-        for k in range(len(path)):
+        for k in range(count):
             layout, levels, _ = part[min(k, len(part) - 1)] if part else \
                 (regions.Layout(), np.zeros(0), 0.0)
             held[k] += float(rest.segment_costs(
                 regions.compliance(rest.uv, layout, levels)).sum())
-    k = int(np.flatnonzero(held <= (1 + K_TOLERANCE) * held.min())[0])
-    layout, levels, _ = path[k]
-    return [_params(angle, layout, levels)]
+    return held
 
 
 def condense(parameters: dict) -> tuple[dict, list[str]]:
-    """The regions one line each (their rectangles' centres and sizes in the world frame)
-    instead of five numbers per rectangle, used or not."""
+    """The regions one line each (their shapes' centres and sizes, or radii, in the world
+    frame) instead of six numbers per shape, used or not."""
     if "map_rects" not in parameters or "map_angle_rad" not in parameters:
         return parameters, []
     kept = {k: v for k, v in parameters.items()
@@ -274,9 +324,11 @@ def condense(parameters: dict) -> tuple[dict, list[str]]:
         except KeyError:
             continue
         cx, cy = regions.to_map(np.array([0.5 * (u0 + u1), 0.5 * (v0 + v1)]), -angle)
+        disc = parameters.get(f"map_rect{k}_shape", [0.0])[0] == regions.DISC
         by_region.setdefault(int(round(label)), []).append(
+            f"disc ({cx:.2f}, {cy:.2f}) m, radius {0.5 * (u1 - u0):.2f} m" if disc else
             f"({cx:.2f}, {cy:.2f}) m, {u1 - u0:.2f} x {v1 - v0:.2f} m")
-    lines = [f"soil map: {len(by_region)} region(s) of {count} rectangle(s) turned "
+    lines = [f"soil map: {len(by_region)} region(s) of {count} shape(s), rectangles turned "
              f"{np.degrees(angle):.1f} deg (centre in world x, y; size along, across):"]
     lines += [f"  region {r} (c_region{r}_per_nm): " + "; ".join(rects)
               for r, rects in sorted(by_region.items())]
@@ -286,17 +338,17 @@ def condense(parameters: dict) -> tuple[dict, list[str]]:
 
 
 def apply(edit: WorldEdit, p) -> None:
-    """Every region (and overlap) with torque slip (c > 0) becomes a turned rectangle of
-    softer soil; a region of negative compliance (the fit's bounds straddle 0) is refused,
-    named."""
+    """Every region (and overlap) with torque slip (c > 0) becomes a patch of softer soil
+    (:meth:`patches`); a region of negative compliance (the fit's bounds straddle 0) is
+    refused, named."""
     levels = p.levels()
     applicable_to_world(bool(np.all(levels >= 0.0)), EFFECT.name,
                         ", ".join(f"c_region{r}_per_nm" for r in np.flatnonzero(levels < 0.0)),
                         f"a region's torque compliance must be >= 0 (a driven wheel cannot "
                         f"run ahead of its rim), got {levels.tolist()} 1/(N m)")
     base = edit.channel_stiffness()
-    patches = [(rect, edit.softer(stiffness_nm(level) / base))
-               for rect, level in p.patches() if level > 0.0]
+    patches = [(region, edit.softer(stiffness_nm(level) / base))
+               for region, level in p.patches() if level > 0.0]
     if patches:
         edit.replace["soil_map"] = PatchSoilMap(edit.soil, patches, blend_width_m=0.0)
 
@@ -338,8 +390,10 @@ EFFECT = Effect(
     hiding=Hiding(("diff_drive", "rover4ws"), draw, slope_deg=(6.0, 12.0),
                   slope_kinds=("rover4ws",), random_slope=False,
                   columns=frozenset({"torque"}), compare=False, drawn=False),
-    # a hand-written map may leave out the rectangles and regions it does not use
+    # a hand-written map may leave out the shapes and regions it does not use, and the
+    # kind of a rectangle
     optional={**{f"map_rect{k}_{e}": 0.0 for k in range(1, MAX_RECTS)
                  for e in (*_EDGES, "region")},
+              **{f"map_rect{k}_shape": 0.0 for k in range(MAX_RECTS)},
               **{f"c_region{r}_per_nm": 0.0 for r in range(1, MAX_REGIONS)}},
 )
