@@ -172,6 +172,8 @@ def test_a_fold_model_the_simulation_cannot_take_is_not_replayed_and_the_report_
         warnings.simplefilter("ignore")
         sim = pybullet_overlay(log, sel, Problem.from_segments(seg))
     assert sim["segments"] > 0 and np.isfinite(sim["rmse_nominal_m"])
+    # every replayed segment has an extended track, all of it missing (none was replayed)
+    assert len(sim["extended"]) == sim["segments"]
     assert all(np.isnan(e).all() for e in sim["extended"])
     assert "cannot be applied to the simulation" in sim["note"]
     assert "k_s_<wheel>_nm" in sim["note"]
