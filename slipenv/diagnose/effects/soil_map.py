@@ -101,8 +101,7 @@ class _SoilMapTerm(Term):
         finite(self)
         require(1 <= round(self.rects) <= MAX_RECTS, self,  # type: ignore[attr-defined]
                 f"rects must be 1..{MAX_RECTS}")
-        count = int(np.clip(round(self.rects), 1, MAX_RECTS))  # type: ignore[attr-defined]
-        for k in range(count):
+        for k in range(self._used()):
             kind = getattr(self, f"rect{k}_shape")
             require(kind in (regions.RECT, regions.DISC), self,
                     f"rect{k}_shape must be 0 (rectangle) or 1 (disc), got {kind}")
@@ -118,9 +117,13 @@ class _SoilMapTerm(Term):
                 and sorted(set(layout.labels)) == list(range(layout.count)), self,
                 f"the rectangles' regions must be 0..{MAX_REGIONS - 1}, each used")
 
+    def _used(self) -> int:
+        """Number of shapes used (``rects`` rounded into 1 … ``MAX_RECTS``)."""
+        return int(np.clip(round(self.rects), 1, MAX_RECTS))  # type: ignore[attr-defined]
+
     def layout(self) -> regions.Layout:
-        """The used rectangles (corners in the map frame [m]) and their regions."""
-        count = int(np.clip(round(self.rects), 1, MAX_RECTS))  # type: ignore[attr-defined]
+        """The used shapes (corners in the map frame [m]), their regions and kinds."""
+        count = self._used()
         rects = tuple(tuple(float(getattr(self, f"rect{k}_{e}")) for e in _EDGES)
                       for k in range(count))
         labels = tuple(int(round(getattr(self, f"rect{k}_region"))) for k in range(count))
