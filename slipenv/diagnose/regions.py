@@ -27,7 +27,10 @@ from cumulative sums over that order (:func:`scan_edge`, exact, one pass); the e
 the best, halfway between the data points on either side (the cut with the widest margin). A
 disc's radius adds intervals in the order of their distance from its centre, so it is scanned
 the same way (:func:`scan_radius`); its centre moves by steps halved down to the map's
-resolution, the radius rescanned at each. Coordinate descent over the edges and discs, each
+resolution, the radius rescanned at each. No shape is narrower than the quadratic's
+``min_size_m`` (a scanned edge stays that far from the opposite one, a radius at least half of
+it, seed cells are widened to it): the data cannot resolve ground finer than the vehicle that
+drove over it. Coordinate descent over the edges and discs, each
 new shape (a new region or part of one; the better of a rectangle and a disc) seeded at the
 best cells of a coarse grid, gives layouts of 1, 2, … shapes; how many is chosen on held-out
 data by the caller.
@@ -65,17 +68,25 @@ class Quadratic:
         Each segment's cost at C = 0.
     uv : ndarray (S, L-1, 2)
         Interval midpoints in the map frame [m].
+    min_size_m : float
+        The narrowest a shape may be (a rectangle's sides, a disc's diameter) [m]: the
+        caller's resolution of the ground, e.g. the vehicle's track width (the replay looks
+        the soil up at the body's centre, between wheels that far apart, so a strip narrower
+        than that is not resolved by the data: it would fit the noise of the few intervals
+        it holds).
     """
 
     G: np.ndarray
     b: np.ndarray
     rr: np.ndarray
     uv: np.ndarray
+    min_size_m: float = 0.0
     _masks: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @classmethod
     def from_residuals(cls, residuals, rows: np.ndarray, n_intervals: int, scale: float,
-                       uv: np.ndarray, r0: np.ndarray | None = None) -> Quadratic:
+                       uv: np.ndarray, r0: np.ndarray | None = None, min_size_m: float = 0.0
+                       ) -> Quadratic:
         """``residuals(j, c)``: the flat training residuals with compliance ``c`` on interval
         ``j`` of every segment (``c = 0``: none); ``rows``: the segment of each residual;
         ``r0``: the residuals without compliance, when the caller has them."""
@@ -90,7 +101,7 @@ class Quadratic:
         for s in range(s_count):
             m = order[starts[s]:starts[s + 1]]
             g[s], b[s], rr[s] = d[m].T @ d[m], d[m].T @ r0[m], r0[m] @ r0[m]
-        return cls(g, b, rr, uv)
+        return cls(g, b, rr, uv, min_size_m)
 
     def inside(self, rect: Rect, kind: int = RECT) -> np.ndarray:
         """:func:`inside` of the midpoints, remembered (a search asks for the same shapes
@@ -104,7 +115,8 @@ class Quadratic:
         return found
 
     def take(self, index: np.ndarray) -> Quadratic:
-        return Quadratic(self.G[index], self.b[index], self.rr[index], self.uv[index])
+        return Quadratic(self.G[index], self.b[index], self.rr[index], self.uv[index],
+                         self.min_size_m)
 
     def segment_costs(self, compliance: np.ndarray) -> np.ndarray:
         """Each segment's cost (S,) for a per-interval compliance (S, L-1)."""
@@ -230,7 +242,10 @@ def scan_edge(q: Quadratic, layout: Layout, k: int, edge: int, limits: Rect,
     held[edge] = limits[edge]  # the scanned edge open to the map's limit
     eligible = (inside(q.uv, tuple(held)) > 0) & (others.masks[layout.labels[k]] == 0)  # type: ignore[arg-type]
     key = -q.uv[..., axis] if lower else q.uv[..., axis]
-    found = _scan(q, layout.labels[k], eligible, key, others)
+    # at least min_size_m from the opposite edge (in the key's sense: -u for a lower edge)
+    opposite = rect[edge + 2] if lower else rect[edge - 2]
+    min_cut = q.min_size_m - opposite if lower else opposite + q.min_size_m
+    found = _scan(q, layout.labels[k], eligible, key, others, min_cut)
     if found is None:
         return None
     cut, levels, cost = found
@@ -247,7 +262,7 @@ def scan_radius(q: Quadratic, layout: Layout, k: int, centre: tuple[float, float
     others = _Normal.of(q, layout, skip=k) if others is None else others
     eligible = others.masks[layout.labels[k]] == 0
     key = np.hypot(q.uv[..., 0] - centre[0], q.uv[..., 1] - centre[1])
-    found = _scan(q, layout.labels[k], eligible, key, others)
+    found = _scan(q, layout.labels[k], eligible, key, others, 0.5 * q.min_size_m)
     if found is None:
         return None
     cut, levels, cost = found
@@ -260,12 +275,12 @@ def _size(limits: Rect) -> float:
     return max(limits[2] - limits[0], limits[3] - limits[1])
 
 
-def _scan(q: Quadratic, region: int, eligible: np.ndarray, key: np.ndarray, others: _Normal
-          ) -> tuple[float | None, np.ndarray, float] | None:
+def _scan(q: Quadratic, region: int, eligible: np.ndarray, key: np.ndarray, others: _Normal,
+          min_cut: float = -np.inf) -> tuple[float | None, np.ndarray, float] | None:
     """The best set of the ``eligible`` intervals with ``key`` below a cut added to
     ``region`` (the others held as in ``others``): (cut, levels, cost), the cut halfway
-    between two distinct keys (None: past the last), or None when no cut leaves every level
-    positive."""
+    between two distinct keys and at least ``min_cut`` (None: past the last), or None when no
+    cut leaves every level positive."""
     gm, a0, h0 = others.gm, others.a, others.h
     coord = key[eligible]
     n = coord.size
@@ -290,21 +305,32 @@ def _scan(q: Quadratic, region: int, eligible: np.ndarray, key: np.ndarray, othe
     a[:, region, region] += added  # (grow_a counted the region's own row twice: 2 M_f·G·add)
     h = np.broadcast_to(h0, (n, len(h0))).copy()
     h[:, region] += grow_h
-    try:
-        c = -np.linalg.solve(a + _ridge(np.mean(a, axis=0)) * np.eye(len(h0)),
-                             h[..., None])[..., 0]
-    except np.linalg.LinAlgError:
-        return None
+    c = -_solve_small(a + _ridge(np.mean(a, axis=0)) * np.eye(len(h0)), h)
     cost = q.rr.sum() + np.einsum("nk,nk->n", h, c)
     sorted_coord = coord[order]
-    # a cut must fall between two distinct coordinates (or beyond the last)
-    valid = np.all(c > 0, axis=1) & np.concatenate([sorted_coord[:-1] != sorted_coord[1:],
-                                                    [True]])
+    # a cut falls between two distinct coordinates (or beyond the last) and not below
+    # min_cut: halfway (the widest margin), or min_cut when that falls within the gap
+    cuts = np.append(np.maximum(0.5 * (sorted_coord[:-1] + sorted_coord[1:]), min_cut), np.inf)
+    valid = np.all(c > 0, axis=1) & np.isfinite(cost) \
+        & np.append(sorted_coord[:-1] != sorted_coord[1:], True) \
+        & (np.append(sorted_coord[1:], np.inf) > min_cut)
     if not np.any(valid):
         return None
     m = int(np.argmin(np.where(valid, cost, np.inf)))
-    cut = float(0.5 * (sorted_coord[m] + sorted_coord[m + 1])) if m + 1 < n else None
-    return cut, c[m], float(cost[m])
+    return (float(cuts[m]) if m + 1 < n else None), c[m], float(cost[m])
+
+
+def _solve_small(a: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """x with a x = h for a stack of systems ``a`` (n, k, k), ``h`` (n, k); a singular one
+    gives non-finite x. One region (k = 1) is a division: what LAPACK's LU does for a 1×1
+    system, without the cost of a batched call."""
+    if h.shape[1] == 1:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return h / a[:, 0]
+    try:
+        return np.linalg.solve(a, h[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        return np.full(h.shape, np.nan)
 
 
 def _move_disc(q: Quadratic, layout: Layout, k: int, limits: Rect, others: _Normal,
@@ -323,17 +349,21 @@ def _move_disc(q: Quadratic, layout: Layout, k: int, limits: Rect, others: _Norm
     floor = resolution * _size(limits)
     step = 0.5 * max(radius, floor)
     step = min(step, _POLISH_STEPS * floor) if placed else step
+    came = None  # the move just made: its way back leads where the cost was higher
     for _ in range(_DISC_MOVES):
         if step < floor:
             break
         (cu, cv), _r = disc_of(best[0].rects[k])
-        tries = [scan_radius(q, best[0], k, (cu + du, cv + dv), limits, others)
-                 for du, dv in ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step))]
-        better = [t for t in tries if t is not None and t[2] < best[2]]
+        moves = [m for m in ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step))
+                 if came is None or m != (-came[0], -came[1])]
+        tries = [(scan_radius(q, best[0], k, (cu + du, cv + dv), limits, others), (du, dv))
+                 for du, dv in moves]
+        better = [(t, m) for t, m in tries if t is not None and t[2] < best[2]]
         if better:
-            best = min(better, key=lambda t: t[2])
+            best, came = min(better, key=lambda tm: tm[0][2])
         else:
             step /= 2
+            came = None
     return best
 
 
@@ -383,7 +413,8 @@ def grow(q: Quadratic, limits: Rect, max_rects: int, max_regions: int, quick: bo
     lowers the cost)."""
     u = np.linspace(limits[0], limits[2], _SEED_CELLS + 1)
     v = np.linspace(limits[1], limits[3], _SEED_CELLS + 1)
-    cells = [(float(u[i]), float(v[j]), float(u[i + 1]), float(v[j + 1]))
+    cells = [_at_least(q.min_size_m, (float(u[i]), float(v[j]), float(u[i + 1]),
+                                      float(v[j + 1])))
              for i in range(_SEED_CELLS) for j in range(_SEED_CELLS)]
     path: list[tuple[Layout, np.ndarray, float]] = []
     layout = Layout()
@@ -405,6 +436,13 @@ def grow(q: Quadratic, limits: Rect, max_rects: int, max_regions: int, quick: bo
             layout, levels, cost = descend(q, layout, limits, placed=True)
         path.append((layout, levels, cost))
     return path
+
+
+def _at_least(size: float, cell: Rect) -> Rect:
+    """``cell`` widened about its centre to ``size`` [m] where it is narrower."""
+    du = 0.5 * max(size - (cell[2] - cell[0]), 0.0)
+    dv = 0.5 * max(size - (cell[3] - cell[1]), 0.0)
+    return cell[0] - du, cell[1] - dv, cell[2] + du, cell[3] + dv
 
 
 def _inscribed(cell: Rect) -> Rect:

@@ -183,7 +183,7 @@ def test_soil_regions_of_other_shapes_are_mapped(layout):
     base = _quiet(cross_validate, problem, (), folds)
     mapped = _quiet(cross_validate, problem, ("soil_map",), folds)
     ratio = mapped.errors.sum() / base.errors.sum()
-    assert ratio < 0.35, ratio  # 0.18 (turned) and 0.075 (disc and L) measured
+    assert ratio < 0.35, ratio  # 0.28 (turned) and 0.080 (disc and L) measured
     m = _quiet(fit, problem, ("soil_map",)).params["soil_map"]
     pos = problem.seg.pos[np.abs(problem.seg.dphi).sum(axis=-1) > 0]
     true = sum(np.where(r.contains(pos[:, 0], pos[:, 1]), r.compliance_per_nm, 0.0)

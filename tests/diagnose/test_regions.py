@@ -3,6 +3,8 @@ rectangles with continuous edges, checked on linear worlds whose exact answer is
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -21,14 +23,15 @@ DISC_AND_L = regions.Layout((regions.disc((-1.6, 1.4), 1.7), (0.5, -3.5, 3.5, -1
 
 
 def _linear_world(seed: int = 0, segments: int = 30, intervals: int = 16, rows: int = 12,
-                  noise: float = 0.0, true: regions.Layout = TRUE):
+                  noise: float = 0.0, true: regions.Layout = TRUE,
+                  levels: np.ndarray = TRUE_LEVELS):
     """Segments of ``intervals`` points scattered over a 8 m square, residuals linear in the
     per-interval compliance (r = r0 + D C) with r0 = -D C_true (+ noise): the true map's
     cost is the noise alone."""
     rng = np.random.default_rng(seed)
     uv = rng.uniform(-4.0, 4.0, (segments, intervals, 2))
     d = rng.normal(0.0, 1.0, (segments, rows, intervals))
-    truth = regions.compliance(uv, true, TRUE_LEVELS)
+    truth = regions.compliance(uv, true, levels)
     r0 = -np.einsum("srj,sj->sr", d, truth) + noise * rng.normal(size=(segments, rows))
     seg_of_row = np.repeat(np.arange(segments), rows)
 
@@ -106,6 +109,45 @@ def test_a_radius_scan_finds_the_best_radius_that_brute_force_finds():
         radii = np.concatenate([0.5 * (dist[1:] + dist[:-1]), [dist[-1] + 1.0]])
         _assert_scan_found(q, scanned, _best_by_solve(q, layout, k,
                                                       [regions.disc(centre, r) for r in radii]))
+
+
+def test_scans_keep_every_shape_at_least_the_minimum_size_and_are_best_among_those():
+    q, *_ = _linear_world(noise=0.05)
+    q = dataclasses.replace(q, min_size_m=1.7)
+    limits = regions.limits_of(q.uv)
+    layout = regions.Layout(((-2.0, -2.5, 0.5, 1.0), regions.disc((2.0, 2.0), 1.0)), (0, 1),
+                            (regions.RECT, regions.DISC))
+    for edge in range(4):
+        axis, lower = edge % 2, edge < 2
+        opposite = layout.rects[0][edge + 2 if lower else edge - 2]
+        coords = np.unique(q.uv[..., axis])
+        mids = np.concatenate([0.5 * (coords[1:] + coords[:-1]), [limits[edge]]])
+        # each cut moved to the minimum size where it would make the rectangle narrower
+        cuts = np.minimum(mids, opposite - 1.7) if lower else np.maximum(mids, opposite + 1.7)
+        rects = [tuple(cut if i == edge else e for i, e in enumerate(layout.rects[0]))
+                 for cut in cuts]
+        scanned = regions.scan_edge(q, layout, 0, edge, limits)
+        u0, v0, u1, v1 = scanned[0].rects[0]
+        assert min(u1 - u0, v1 - v0) >= 1.7 - 1e-12
+        _assert_scan_found(q, scanned, _best_by_solve(q, layout, 0, rects))
+    centre = (0.3, -0.2)
+    dist = np.unique(np.hypot(q.uv[..., 0] - centre[0], q.uv[..., 1] - centre[1]))
+    radii = np.maximum(np.concatenate([0.5 * (dist[1:] + dist[:-1]), [dist[-1] + 1.0]]), 0.85)
+    scanned = regions.scan_radius(q, layout, 1, centre, limits)
+    assert regions.disc_of(scanned[0].rects[1])[1] >= 0.85 - 1e-12
+    _assert_scan_found(q, scanned, _best_by_solve(q, layout, 1,
+                                                  [regions.disc(centre, r) for r in radii]))
+
+
+def test_a_strip_narrower_than_the_minimum_size_is_not_fitted_as_a_sliver():
+    strip = regions.Layout(((-4.0, -0.2, 4.0, 0.2),), (0,))  # 0.4 m wide, across the map
+    q, *_ = _linear_world(segments=60, true=strip, levels=TRUE_LEVELS[:1])
+    limits = regions.limits_of(q.uv)
+    sliver = regions.grow(q, limits, 1, 1)[0][0].rects[0]
+    assert sliver[3] - sliver[1] < 0.6  # without a minimum, the strip itself
+    for shapes, *_ in regions.grow(dataclasses.replace(q, min_size_m=1.5), limits, 3, 3):
+        for rect in shapes.rects:
+            assert min(rect[2] - rect[0], rect[3] - rect[1]) >= 1.5 - 1e-12
 
 
 def test_a_disc_and_an_l_shaped_region_are_found_the_disc_as_one_disc():

@@ -13,13 +13,15 @@ Fitting (:func:`start`, ``slipenv.diagnose.regions``): the residuals' sensitivit
 compliance of each run of a few intervals gives a quadratic in which any map is scored without
 replaying; the rectangles' edges and the discs' centres and radii are placed anywhere (between
 data points, not on a grid: a grid's cell at a field's edge mixes the soft lane ends with the
-firm turns beyond them), greedily one shape at a time. The frame's angle is the one whose map
-(a quicker search: one seed cell per shape, no polish) fits the training data best (every
-``_ANGLE_STEP`` over a quarter turn and the route's main direction, then the step halved twice
-around the best); the number of shapes is chosen on held-out data: maps found on the other
-training segments are scored on each of ``_K_FOLDS`` interleaved folds, and the fewest shapes
-within ``K_TOLERANCE`` of the best held-out error win. The full fit then refines the
-compliances with the layout held (the layout is a model-order choice, not a fitted number).
+firm turns beyond them), greedily one shape at a time, none narrower than the vehicle's track
+width (the replay looks the soil up at the body's centre, so ground finer than the vehicle is
+not resolved: such a sliver fits the noise of the few intervals it holds). The frame's angle is
+the one whose map (a quicker search: one seed cell per shape, no polish) fits the training data
+best (every ``_ANGLE_STEP`` over a quarter turn and the route's main direction, then the step
+halved twice around the best); the number of shapes is chosen on held-out data: maps found on
+the other training segments are scored on each of ``_K_FOLDS`` interleaved folds, and the
+fewest shapes within ``K_TOLERANCE`` of the best held-out error win. The full fit then refines
+the compliances with the layout held (the layout is a model-order choice, not a fitted number).
 Simulation: a ``PatchSoilMap`` over the base soil painting each region (the ``Union`` of its
 turned rectangles and discs), then each overlap of regions (their ``Intersection``) with the
 summed compliance. Hidden in the PyBullet tests on request (``Hiding.drawn`` False): a field
@@ -254,7 +256,9 @@ def start(ctx: StartContext) -> list:
     def residuals(j: int, c: float) -> np.ndarray:
         return ctx.residuals({**ctx.model, EFFECT.name: _Probe(*spans[j], c)})
 
-    world = regions.Quadratic.from_residuals(residuals, rows, len(spans), scale, centres, r0)
+    # no shape narrower than the vehicle's track (regions.Quadratic.min_size_m)
+    world = regions.Quadratic.from_residuals(residuals, rows, len(spans), scale, centres, r0,
+                                             float(np.median(seg.track)))
 
     def frame(angle: float) -> tuple[regions.Quadratic, regions.Rect]:
         q = dataclasses.replace(world, uv=regions.to_map(centres, angle))
