@@ -10,7 +10,7 @@ import warnings
 import numpy as np
 import pytest
 
-from slipenv.diagnose import synth
+from slipenv.diagnose import regions, synth
 from slipenv.diagnose.cli import diagnose
 from slipenv.diagnose.effects import effect
 from slipenv.diagnose.extension import apply_model
@@ -222,6 +222,26 @@ def test_a_maps_patches_hold_its_compliance_everywhere_overlaps_included():
     # every sum of the regions' compliances occurs
     assert set(np.round(m.compliance_at(xy), 6)) == \
         {0.0, 0.004, 0.002, 0.001, 0.006, 0.005, 0.003, 0.007}
+
+
+def test_a_fitted_map_is_searched_with_no_shape_narrower_than_the_vehicles_track(
+        field_problem, monkeypatch):
+    """The replay looks the soil up at the body's centre: ground finer than the track is
+    not resolved, so every search (frame angles, held-out shape counts, the map) is bounded."""
+    seen = []
+    search = regions.grow
+
+    def spy(q, *args, **kwargs):
+        seen.append(q.min_size_m)
+        return search(q, *args, **kwargs)
+
+    monkeypatch.setattr(regions, "grow", spy)
+    m = _quiet(fit, field_problem, ("soil_map",)).params["soil_map"]
+    track = float(np.median(field_problem.seg.track))
+    assert track == pytest.approx(0.5) and seen
+    np.testing.assert_allclose(seen, track)
+    for u0, v0, u1, v1 in m.layout().rects:
+        assert min(u1 - u0, v1 - v0) >= track - 1e-9
 
 
 def test_the_fitted_map_is_applied_to_the_simulation_as_patches(field_problem):
