@@ -28,9 +28,11 @@ the best, halfway between the data points on either side (the cut with the wides
 disc's radius adds intervals in the order of their distance from its centre, so it is scanned
 the same way (:func:`scan_radius`); its centre moves by steps halved down to the map's
 resolution, the radius rescanned at each. No shape is narrower than the quadratic's
-``min_size_m`` (a scanned edge stays that far from the opposite one, a radius at least half of
-it, seed cells are widened to it): the data cannot resolve ground finer than the vehicle that
-drove over it. Coordinate descent over the edges and discs, each
+``min_size_m`` where the data are (a scanned edge stays that far from the opposite one, a
+radius at least half of it, seed cells are widened to it): the data cannot resolve ground
+finer than the vehicle that drove over it. An edge moved past the last data point goes to the
+map's limit, which may leave a shape at the border narrower (no data tell the places beyond
+the last point apart). Coordinate descent over the edges and discs, each
 new shape (a new region or part of one; the better of a rectangle and a disc) seeded at the
 best cells of a coarse grid, gives layouts of 1, 2, … shapes; how many is chosen on held-out
 data by the caller.
