@@ -135,10 +135,17 @@ def unpack(effects: tuple[str, ...], x) -> dict[str, Term]:
     return out
 
 
-def param_count(effects: tuple[str, ...]) -> int:
+def param_count(effects: tuple[str, ...], params: dict[str, Term] | None = None) -> int:
     """Number of fitted parameters of ``effects`` (a layout field counts: chosen from the
-    data, it is a degree of freedom of the model; a redundant one held is not)."""
-    return sum(len(effect(name).fields()) - len(effect(name).held(effects)) for name in effects)
+    data, it is a degree of freedom of the model; a redundant one held is not; with the
+    fitted ``params``, only the fields their layout uses: ``Effect.used``)."""
+    total = 0
+    for name in effects:
+        eff = effect(name)
+        fields = len(eff.fields()) if params is None or eff.used is None else \
+            eff.used(params[name])
+        total += fields - len(eff.held(effects))
+    return total
 
 
 def layout(effects: tuple[str, ...], seg: Segments) -> list[tuple[str, Bound]]:

@@ -142,6 +142,8 @@ def cross_validate(problem: Problem, effects: tuple[str, ...], folds: np.ndarray
         pred[test] = (replay.simulate(part, p) if chan == "pose"
                       else replay.simulate_gyro_heading(part, p))
     cand.errors, cand.pred = errors, pred
+    if cand.fold_fits:  # the most any fold's fit uses (a map's shapes vary by fold)
+        cand.n_params = max(param_count(effects, f.params) for f in cand.fold_fits)
     return cand
 
 

@@ -105,6 +105,11 @@ def test_soil_regions_are_mapped_and_the_map_cuts_the_held_out_error(field_probl
     ratio = mapped.errors.sum() / base.errors.sum()
     assert ratio < 0.2, ratio  # the map predicts segments it never saw (0.08 measured)
     assert mapped.errors.sum() < 0.3 * single.errors.sum()  # one stiffness everywhere cannot
+    # the parameter count is what the folds' maps use (angle, count, each shape's corners,
+    # region and kind, each region's compliance), not every shape the contract could hold
+    used = [2 + 6 * len(f.params["soil_map"].layout().rects) + f.params["soil_map"].regions
+            for f in mapped.fold_fits]
+    assert mapped.n_params == max(used) < 35 and single.n_params == 2
     f = _quiet(fit, problem, ("soil_map",))
     m = f.params["soil_map"]
     assert m.regions >= 2

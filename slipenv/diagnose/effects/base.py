@@ -373,6 +373,10 @@ class Effect:
         ``{contract name: [value, se]} -> (kept, lines)``: how a report shows its parameters
         when one line each would bury them (a map's regions, one line each, not four corners):
         ``kept`` are listed one per line, ``lines`` follow them. None: every one listed.
+    used : callable, optional
+        ``used(params) -> int``: the fields a fitted instance uses, when its layout leaves
+        some unused (a map of one disc has no use for four more shapes' corners); its
+        parameter count (:func:`slipenv.diagnose.fit.param_count`). None: every field.
     """
 
     name: str
@@ -395,6 +399,7 @@ class Effect:
     redundant: dict[str, str] = field(default_factory=dict)
     local: bool = False
     condense: Callable[[dict[str, Any]], tuple[dict[str, Any], list[str]]] | None = None
+    used: Callable[[Any], int] | None = None
 
     def __post_init__(self) -> None:
         names = self.fields()
@@ -408,8 +413,9 @@ class Effect:
         for flag in ("calibration", "local"):
             if not isinstance(getattr(self, flag), bool):
                 raise ValueError(f"effect {self.name!r}: {flag} must be True or False")
-        if self.condense is not None and not callable(self.condense):
-            raise ValueError(f"effect {self.name!r}: condense must be a function or None")
+        for hook in ("condense", "used"):
+            if getattr(self, hook) is not None and not callable(getattr(self, hook)):
+                raise ValueError(f"effect {self.name!r}: {hook} must be a function or None")
         for f, other in self.redundant.items():
             if f not in names or not isinstance(other, str) or other == self.name:
                 raise ValueError(f"effect {self.name!r}: redundant maps its own fields "

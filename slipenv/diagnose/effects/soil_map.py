@@ -123,6 +123,11 @@ class _SoilMapTerm(Term):
         """Number of shapes used (``rects`` rounded into 1 … ``MAX_RECTS``)."""
         return int(np.clip(round(self.rects), 1, MAX_RECTS))  # type: ignore[attr-defined]
 
+    def used_fields(self) -> int:
+        """Fields the layout uses: the frame's angle and the shape count, each used shape's
+        corners, region and kind, each region's compliance."""
+        return 2 + (len(_EDGES) + 2) * self._used() + self.regions
+
     def layout(self) -> regions.Layout:
         """The used shapes (corners in the map frame [m]), their regions and kinds."""
         count = self._used()
@@ -391,7 +396,7 @@ EFFECT = Effect(
               *(Scalar(name, f"map_{name}") for name in _RECTS),
               *(Scalar(name, f"c_region{k}_per_nm") for k, name in enumerate(_LEVELS))),
     mechanism="torque slip law", fixed=_FIXED,
-    local=True, condense=condense,
+    local=True, condense=condense, used=lambda p: p.used_fields(),
     # level differential drive (as soil_patch), the rover on a slope (its drive torque, as
     # torque_slip); a skid-steer vehicle shows a softer longitudinal law as turning slip
     hiding=Hiding(("diff_drive", "rover4ws"), draw, slope_deg=(6.0, 12.0),
