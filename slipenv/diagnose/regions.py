@@ -454,8 +454,9 @@ def _inscribed(cell: Rect) -> Rect:
 
 def _seeds(q: Quadratic, layout: Layout, cells: list[Rect], max_regions: int,
            cost: float) -> list[Layout]:
-    """The ``_SEEDS`` best layouts of one more rectangle, a cell of ``cells`` (a partition
-    of the map) as a new region or added to one, that lower ``cost`` with every level > 0.
+    """The ``_SEEDS`` best layouts of one more rectangle, a cell of ``cells`` (a grid over
+    the map, each cell widened to the minimum size, so they may overlap) as a new region or
+    added to one, that lower ``cost`` with every level > 0.
     All cells of a label are scored at once: the cell indicators are the columns of O."""
     onehot = np.stack([q.inside(cell) for cell in cells], axis=-1)  # (S, L-1, cells)
     normal = _Normal.of(q, layout)

@@ -396,7 +396,7 @@ EFFECT = Effect(
               *(Scalar(name, f"map_{name}") for name in _RECTS),
               *(Scalar(name, f"c_region{k}_per_nm") for k, name in enumerate(_LEVELS))),
     mechanism="torque slip law", fixed=_FIXED,
-    local=True, condense=condense, used=lambda p: p.used_fields(),
+    local=True, condense=condense, used=_SoilMapTerm.used_fields,
     # level differential drive (as soil_patch), the rover on a slope (its drive torque, as
     # torque_slip); a skid-steer vehicle shows a softer longitudinal law as turning slip
     hiding=Hiding(("diff_drive", "rover4ws"), draw, slope_deg=(6.0, 12.0),
