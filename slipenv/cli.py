@@ -315,6 +315,9 @@ def add_diagnose(sub: SubParsers) -> argparse.ArgumentParser:
     p.add_argument("--report", default=None,
                    help="folder for the human report (plots + text; None: no report)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="random seed of the fit")
+    p.add_argument("--jobs", type=positive_int, default=None,
+                   help="processes the fits run on (default: every core this process may "
+                        "use); the diagnosis is the same whatever the number")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     return p
 

@@ -1,4 +1,4 @@
-"""``slipenv diagnose LOG_DIR [--json PATH] [--report DIR] [--seed N] [--quiet]``.
+"""``slipenv diagnose LOG_DIR [--json PATH] [--report DIR] [--seed N] [--jobs N] [--quiet]``.
 
 ``LOG_DIR`` is one slipenv-log/1 folder, or a folder of them (diagnosed together: one vehicle,
 several runs; the held-out comparison then predicts each run with models fitted on other
@@ -41,19 +41,23 @@ def _has_truth(folder: Path) -> bool:
     return any(all(log.has(c) for c in GT_COLUMNS) for log in logs)
 
 
-def diagnose(logs: list[Log], where: str, *, progress: bool = False) -> tuple[dict, object]:
-    """Run the diagnosis on ``logs``; (JSON report, context for the human report)."""
+def diagnose(logs: list[Log], where: str, *, progress: bool = False, jobs: int = 1
+             ) -> tuple[dict, object]:
+    """Run the diagnosis on ``logs``; (JSON report, context for the human report).
+    ``jobs``: processes the fits run on (``workers.py``; the report does not depend on it)."""
     import numpy as np
 
     from slipenv.diagnose.fit import FitError, Problem
     from slipenv.diagnose.replay import build_segments
     from slipenv.diagnose.report import build_report
     from slipenv.diagnose.select import select
+    from slipenv.diagnose.workers import one_blas_thread
 
     try:
-        problem = Problem.from_segments(build_segments(logs))
-        sel = select(problem, progress=progress, logs=logs)
-        return build_report(sel, problem, logs, where), (sel, problem)
+        with one_blas_thread():  # the same numbers on every machine (``workers.py``)
+            problem = Problem.from_segments(build_segments(logs))
+            sel = select(problem, progress=progress, logs=logs, jobs=jobs)
+            return build_report(sel, problem, logs, where), (sel, problem)
     except (FitError, np.linalg.LinAlgError, FloatingPointError) as exc:
         names = ", ".join(str(log.path) if log.path else "<memory>" for log in logs)
         raise DiagnosisError(f"{where}: the diagnosis of {names} failed: {exc}") from exc
@@ -81,7 +85,12 @@ def main(args) -> int:
         print(proprio.summary(result))
         return 0
     logs = load_logs(folder)
-    report, (sel, problem) = diagnose(logs, str(folder), progress=not quiet)
+    jobs = getattr(args, "jobs", None)
+    if jobs is None:
+        from slipenv.diagnose.workers import available_cores
+
+        jobs = available_cores()
+    report, (sel, problem) = diagnose(logs, str(folder), progress=not quiet, jobs=jobs)
     sim = None
     if args.report:
         from slipenv.diagnose.simreplay import pybullet_overlay

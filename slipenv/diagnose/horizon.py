@@ -36,8 +36,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
-from slipenv.diagnose.fit import Problem, fit
+from slipenv.diagnose.fit import Problem
 from slipenv.diagnose.segments import Segments, cut_spans
+from slipenv.diagnose.workers import INLINE, Workers
 
 N_BLOCKS = 10  # blocks in time of a single log (folds of the blocked cross-validation)
 MIN_BLOCKS = 3  # folds needed for a t-test with at least two degrees of freedom
@@ -168,23 +169,35 @@ def build(problem: Problem, arrays: list[dict], logs: list, n_folds: int,
     return Horizons(out_seg, out_fold, out_block, out_len)
 
 
+def submit(workers: Workers, problem: Problem, hz: Horizons, effects: tuple[str, ...],
+           starts: list[dict] | None = None) -> list:
+    """The fold fits :func:`held_out` needs, submitted to ``workers`` (none for no effect)."""
+    if not effects:
+        return []
+    # fitted on the other folds' blocks replayed whole: a slow drift is estimated from the
+    # horizon it shows on, not from re-anchored pieces of it
+    whole = hz.seg[-1]
+    return [workers.fit(Problem(whole.take(np.flatnonzero(hz.fold[-1] != f)),
+                                problem.heading_scale_m, problem.travel_m),
+                        effects, None, starts[i] if starts else None)
+            for i, f in enumerate(hz.folds)]
+
+
 def held_out(problem: Problem, hz: Horizons, effects: tuple[str, ...],
-             channel: str, starts: list[dict] | None = None) -> Replays:
+             channel: str, starts: list[dict] | None = None, fits: list | None = None
+             ) -> Replays:
     """Held-out replays of the blocks by ``effects``, fitted on each fold's training part
-    (``starts``: per fold, fitted values to start from)."""
+    (``starts``: per fold, fitted values to start from; ``fits``: those fits as
+    :func:`submit` gave them, else run here)."""
     folds = hz.folds
+    if fits is None:
+        fits = submit(INLINE, problem, hz, effects, starts)
     res = [np.zeros(seg.gt.shape[:2] + ((1,) if channel == "gyro" else (3,)))
            for seg in hz.seg]
     errors = np.zeros((len(folds), len(hz.seg)))
     models = []
     for i, f in enumerate(folds):
-        model = {}
-        if effects:
-            # fitted on the other folds' blocks replayed whole: a slow drift is estimated
-            # from the horizon it shows on, not from re-anchored pieces of it
-            whole, others = hz.seg[-1], np.flatnonzero(hz.fold[-1] != f)
-            train = Problem(whole.take(others), problem.heading_scale_m, problem.travel_m)
-            model = fit(train, effects, start=starts[i] if starts else None).params
+        model = fits[i].result().params if effects else {}
         models.append(model)
         for h, (seg, fold) in enumerate(zip(hz.seg, hz.fold, strict=True)):
             idx = np.flatnonzero(fold == f)

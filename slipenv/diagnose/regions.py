@@ -28,11 +28,13 @@ the best, halfway between the data points on either side (the cut with the wides
 disc's radius adds intervals in the order of their distance from its centre, so it is scanned
 the same way (:func:`scan_radius`); its centre moves by steps halved down to the map's
 resolution, the radius rescanned at each. No shape is narrower than the quadratic's
-``min_size_m`` where the data are (a scanned edge stays that far from the opposite one, a
-radius at least half of it, seed cells are widened to it): the data cannot resolve ground
-finer than the vehicle that drove over it. An edge moved past the last data point goes to the
-map's limit, which may leave a shape at the border narrower (no data tell the places beyond
-the last point apart). Coordinate descent over the edges and discs, each
+``min_size_m`` (a scanned edge stays that far from the opposite one, a radius at least half
+of it, seed cells are widened to it): the data cannot resolve ground finer than the vehicle
+that drove over it. An edge moved past the last data point goes to the map's limit, or past
+it when the shape would otherwise end narrower (a disc past the farthest point likewise): no
+data tell the places beyond the last point apart, so the cost is the same, and the shape
+keeps its size where the replay may drive beyond the log. Coordinate descent over the edges
+and discs, each
 new shape (a new region or part of one; the better of a rectangle and a disc) seeded at the
 best cells of a coarse grid, gives layouts of 1, 2, … shapes; how many is chosen on held-out
 data by the caller.
@@ -252,7 +254,11 @@ def scan_edge(q: Quadratic, layout: Layout, k: int, edge: int, limits: Rect,
         return None
     cut, levels, cost = found
     out = list(rect)
-    out[edge] = limits[edge] if cut is None else (-cut if lower else cut)
+    if cut is None:  # past the last point: to the map's limit, or past it to the minimum size
+        cut = -min_cut if lower else min_cut
+        out[edge] = min(limits[edge], cut) if lower else max(limits[edge], cut)
+    else:
+        out[edge] = -cut if lower else cut
     return layout.with_rect(k, tuple(out)), levels, cost  # type: ignore[arg-type]
 
 
@@ -268,8 +274,9 @@ def scan_radius(q: Quadratic, layout: Layout, k: int, centre: tuple[float, float
     if found is None:
         return None
     cut, levels, cost = found
-    if cut is None:  # every point: a disc reaching past the farthest
-        cut = float(key[eligible].max()) + _RESOLUTION * _size(limits)
+    if cut is None:  # every point: a disc reaching past the farthest, and of the minimum size
+        cut = max(float(key[eligible].max()) + _RESOLUTION * _size(limits),
+                  0.5 * q.min_size_m)
     return layout.with_rect(k, disc(centre, cut)), levels, cost
 
 

@@ -48,8 +48,9 @@ from tqdm import tqdm
 
 from slipenv.diagnose import horizon, replay
 from slipenv.diagnose.effects import EFFECTS, effect
-from slipenv.diagnose.fit import Fit, Problem, fit, param_count
+from slipenv.diagnose.fit import Fit, Problem, param_count
 from slipenv.diagnose.segments import Segments, log_arrays
+from slipenv.diagnose.workers import INLINE, Workers
 
 ALPHA = 0.01  # one-sided p-value an effect must beat
 MIN_GAIN = 0.2  # relative fall of the held-out mean squared error an effect must reach
@@ -119,22 +120,35 @@ def make_folds(seg: Segments) -> np.ndarray:
     return np.arange(n) % min(N_FOLDS, n)
 
 
+def submit_folds(workers: Workers, problem: Problem, effects: tuple[str, ...],
+                 folds: np.ndarray, starts: list[dict] | None = None) -> list:
+    """The fold fits :func:`cross_validate` needs, submitted to ``workers`` (none for no
+    effect)."""
+    if not effects:
+        return []
+    return [workers.fit(problem, effects, np.flatnonzero(folds != k),
+                        starts[i] if starts else None)
+            for i, k in enumerate(np.unique(folds))]
+
+
 def cross_validate(problem: Problem, effects: tuple[str, ...], folds: np.ndarray,
-                   channel: str | None = None, starts: list[dict] | None = None) -> Candidate:
+                   channel: str | None = None, starts: list[dict] | None = None,
+                   fits: list | None = None) -> Candidate:
     """Held-out errors and predictions of ``effects`` (refitted with each fold left out;
     ``starts``: per fold, fitted values to start from, e.g. the named cause's when an effect
-    is added to it)."""
+    is added to it; ``fits``: those fits as :func:`submit_folds` gave them, else run here)."""
     seg = problem.seg
     chan = channel or problem.channel(effects)
     cand = Candidate(effects, chan, param_count(effects))
+    if fits is None:
+        fits = submit_folds(INLINE, problem, effects, folds, starts)
     errors = np.zeros(len(seg))
     pred = np.zeros(seg.gt.shape if chan == "pose" else seg.gt.shape[:2])
     for i, k in enumerate(np.unique(folds)):
         test = np.flatnonzero(folds == k)
         p: replay.Model = {}
         if effects:
-            f = fit(problem, effects, np.flatnonzero(folds != k),
-                    start=starts[i] if starts else None)
+            f = fits[i].result()
             cand.fold_fits.append(f)
             p = f.params
         part = seg.take(test)
@@ -191,26 +205,41 @@ def _judge(problem: Problem, cand: Candidate, reference: np.ndarray,
     cand.significant = cand.short_significant or cand.long_significant
 
 
+def _submit_long(workers: Workers, problem: Problem, hz: tuple | None,
+                 effects: tuple[str, ...], warm: tuple[Candidate, ...] = ()) -> tuple | None:
+    """The fold fits :func:`_judge_long` needs for ``effects`` (blocks, halves), submitted."""
+    if hz is None:
+        return None
+    blocks, halves = hz
+    return (horizon.submit(workers, problem, blocks, effects,
+                           _merged([c.long.replays.models for c in warm])),
+            None if halves is None else
+            horizon.submit(workers, problem, halves, effects,
+                           _merged([c.long_half.models for c in warm])))
+
+
 def _judge_long(problem: Problem, hz: tuple | None, cand: Candidate,
                 reference: tuple[horizon.Replays, horizon.Replays | None] | None,
-                increment: bool = False, warm: tuple[Candidate, ...] = ()) -> None:
+                increment: bool = False, warm: tuple[Candidate, ...] = (),
+                pending: tuple | None = None, workers: Workers = INLINE) -> None:
     """The long-horizon route (``horizon.py``): the same three tests on the held-out blocks
     replayed at horizons up to the whole block (``hz``: the blocks, and the two halves of a
     single log for the gain and drift; ``reference``: their replays by the reference).
     ``increment``: materiality not required (``cand`` adds a calibration effect to a named
     cause); ``warm``: the candidates ``cand`` joins (its fits start from theirs, fold by
-    fold: the named cause's and the added effect's fitted alone).
+    fold: the named cause's and the added effect's fitted alone); ``pending``: its fits as
+    :func:`_submit_long` gave them, else submitted to ``workers`` here.
     The candidate's held-out replays do not depend on the reference: judged again (an added
     cause, then against the nominal model), it reuses them."""
     if hz is None or reference is None:
         return
     blocks, halves = hz
     if cand.long is None:
-        replays = horizon.held_out(problem, blocks, cand.effects, cand.channel,
-                                   _merged([c.long.replays.models for c in warm]))
+        fits, half_fits = pending or _submit_long(workers, problem, hz, cand.effects, warm)
+        replays = horizon.held_out(problem, blocks, cand.effects, cand.channel, fits=fits)
         cand.long_half = (None if halves is None else
                           horizon.held_out(problem, halves, cand.effects, cand.channel,
-                                           _merged([c.long_half.models for c in warm])))
+                                           fits=half_fits))
     else:
         replays = cand.long.replays
     half = None if halves is None else (cand.long_half, reference[1], halves)
@@ -278,13 +307,56 @@ def _choose(sig: list[Candidate], long_base: tuple | None) -> Candidate:
     return _pick(short) if short or long_base is None else _pick_long(sig, long_base)
 
 
-def select(problem: Problem, progress: bool = False, logs: list | None = None) -> Selection:
+def _step(problem: Problem, hz: tuple | None, folds: np.ndarray, candidates: list[Candidate],
+          current: Candidate, rest: list[str], long_base: tuple | None, workers: Workers
+          ) -> Candidate | None:
+    """One forward-selection step: ``current`` joined by each of ``rest`` in turn; the pick
+    among the joints that pass against ``current`` (None if none does)."""
+    alone = {name: next(c for c in candidates if c.effects == (name,)) for name in rest}
+    # each part starts from its own fit, fold by fold: the named cause's, and the added
+    # effect's fitted alone (no second search for its start, e.g. a patch)
+    submitted = {name: submit_folds(workers, problem, (*current.effects, name), folds,
+                                    _merged([[f.params for f in current.fold_fits],
+                                             [f.params for f in alone[name].fold_fits]]))
+                 for name in rest}
+    joints = {}
+    for name in rest:
+        joints[name] = cross_validate(problem, (*current.effects, name), folds,
+                                      fits=submitted[name])
+        _judge(problem, joints[name], current.errors, increment=effect(name).calibration)
+    # the long route only where needed (cost), and not for a local effect (``Effect.local``:
+    # it shows on the short segments that cross it)
+    warm = {name: (current, alone[name]) if alone[name].long is not None else ()
+            for name in rest}
+    longs = {name: _submit_long(workers, problem, hz, joints[name].effects, warm[name])
+             for name in rest if current.long is not None
+             and not joints[name].short_significant and not effect(name).local}
+    trials = []
+    for name in rest:
+        if name in longs:
+            _judge_long(problem, hz, joints[name], (current.long.replays, current.long_half),
+                        increment=effect(name).calibration, warm=warm[name],
+                        pending=longs[name])
+        if joints[name].significant:
+            trials.append(joints[name])
+    return _choose(trials, long_base) if trials else None
+
+
+def select(problem: Problem, progress: bool = False, logs: list | None = None,
+           jobs: int = 1) -> Selection:
     """Compare every applicable effect on held-out segments and name the cause.
 
     With ``logs`` (those ``problem`` was cut from), every effect is also compared on
     held-out blocks replayed at long horizons (``horizon.py``); an effect counts when it
-    passes the tests on either route.
+    passes the tests on either route. ``jobs``: processes the fits run on (``workers.py``;
+    the outcome does not depend on it).
     """
+    with Workers(jobs) as workers:
+        return _select(problem, progress, logs, workers)
+
+
+def _select(problem: Problem, progress: bool, logs: list | None, workers: Workers
+            ) -> Selection:
     seg = problem.seg
     folds = make_folds(seg)
     channels = ["pose"] + (["gyro"] if seg.gyro is not None else [])
@@ -300,14 +372,20 @@ def select(problem: Problem, progress: bool = False, logs: list | None = None) -
                        None if hz[1] is None else horizon.held_out(problem, hz[1], (), ch))
                   for ch in channels} if hz is not None else {})
     names = list(EFFECTS)
+    why = {name: effect(name).applicable(seg) for name in names}
+    # every fit of every testable effect submitted at once, collected in order below
+    pending = {name: (submit_folds(workers, problem, (name,), folds),
+                      _submit_long(workers, problem, hz, (name,))
+                      if long_base.get(effect(name).channel) is not None else None)
+               for name in names if why[name] is None}
     candidates: list[Candidate] = []
     for name in tqdm(names, desc="fitting effects", unit="effect", disable=not progress):
-        why = effect(name).applicable(seg)
-        if why is not None:
-            candidates.append(Candidate((name,), effect(name).channel, untestable=why))
+        if why[name] is not None:
+            candidates.append(Candidate((name,), effect(name).channel, untestable=why[name]))
             continue
-        cand = cross_validate(problem, (name,), folds)
-        _judge_long(problem, hz, cand, long_base.get(cand.channel))
+        fold_fits, long_fits = pending.pop(name)
+        cand = cross_validate(problem, (name,), folds, fits=fold_fits)
+        _judge_long(problem, hz, cand, long_base.get(cand.channel), pending=long_fits)
         _judge(problem, cand, baseline[cand.channel].errors)
         candidates.append(cand)
     final: dict[str, Candidate] = {}
@@ -323,36 +401,20 @@ def select(problem: Problem, progress: bool = False, logs: list | None = None) -
         rest = [r for r in rest if r not in current.effects
                 and not _same_mechanism(r, current.effects)]
         while rest:
-            trials = []
-            for name in rest:
-                # each part starts from its own fit, fold by fold: the named cause's, and the
-                # added effect's fitted alone (no second search for its start, e.g. a patch)
-                alone = next(c for c in candidates if c.effects == (name,))
-                joint = cross_validate(problem, (*current.effects, name), folds,
-                                       starts=_merged([[f.params for f in current.fold_fits],
-                                                       [f.params for f in alone.fold_fits]]))
-                calibration = effect(name).calibration
-                _judge(problem, joint, current.errors, increment=calibration)
-                # the long route only where needed (cost), and not for a local effect
-                # (``Effect.local``: it shows on the short segments that cross it)
-                if not joint.short_significant and not effect(name).local:
-                    _judge_long(problem, hz, joint, None if current.long is None
-                                else (current.long.replays, current.long_half),
-                                increment=calibration,
-                                warm=(current, alone) if alone.long is not None else ())
-                if joint.significant:
-                    trials.append(joint)
-            if not trials:
+            best = _step(problem, hz, folds, candidates, current, rest, long_base.get(ch),
+                         workers)
+            if best is None:
                 break
-            current = _choose(trials, long_base.get(ch))
-            _judge_long(problem, hz, current, long_base.get(ch))
+            current = best
+            _judge_long(problem, hz, current, long_base.get(ch), workers=workers)
             _judge(problem, current, baseline[ch].errors)
             rest = [r for r in rest if r not in current.effects
                     and not _same_mechanism(r, current.effects)]
         final[ch] = current
     order = sorted(final.values(), key=lambda c: -c.gain_relative)
     chosen = [e for c in order for e in c.effects]
-    fits = {ch: fit(problem, c.effects) for ch, c in final.items()}
+    submitted = {ch: workers.fit(problem, c.effects) for ch, c in final.items()}
+    fits = {ch: f.result() for ch, f in submitted.items()}
     ranked = sorted(candidates, key=lambda c: (c.untestable is not None,
                                                c.effects[0] not in chosen[:1],
                                                not c.significant, c.error_ratio))

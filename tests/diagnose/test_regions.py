@@ -139,6 +139,19 @@ def test_scans_keep_every_shape_at_least_the_minimum_size_and_are_best_among_tho
                                                   [regions.disc(centre, r) for r in radii]))
 
 
+def test_an_edge_moved_past_the_last_point_keeps_the_minimum_size_beyond_the_map():
+    border = regions.Layout(((-4.5, -4.5, -3.4, 4.5),), (0,))  # soft ground along one border
+    q, *_ = _linear_world(segments=60, true=border, levels=TRUE_LEVELS[:1])
+    q = dataclasses.replace(q, min_size_m=1.7)
+    limits = regions.limits_of(q.uv)
+    start = regions.Layout(((-3.6, -4.5, -3.4, 4.5),), (0,))
+    found, _, cost = regions.scan_edge(q, start, 0, 0, limits)
+    u0, _, u1, _ = found.rects[0]
+    assert cost < 1e-6 * q.rr.sum()  # every soft interval in: the edge went past the last
+    assert u1 - limits[0] < 1.7  # the map's limit alone would leave it narrower
+    assert u0 == pytest.approx(u1 - 1.7) and u0 < limits[0]
+
+
 def test_a_strip_narrower_than_the_minimum_size_is_not_fitted_as_a_sliver():
     strip = regions.Layout(((-4.0, -0.2, 4.0, 0.2),), (0,))  # 0.4 m wide, across the map
     q, *_ = _linear_world(segments=60, true=strip, levels=TRUE_LEVELS[:1])

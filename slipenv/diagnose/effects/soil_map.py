@@ -198,6 +198,7 @@ class _SoilMapTerm(Term):
 
 
 SoilMap = _make_params()
+SoilMapParams = SoilMap  # its class's name: pickle (worker processes) looks it up by it
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,86 @@
+"""``slipenv.diagnose.workers``: the diagnosis's fits on worker processes, with the same
+outcome bit for bit as in one process."""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import pickle
+import warnings
+
+import numpy as np
+import pytest
+from threadpoolctl import threadpool_info
+
+from slipenv.cli import main as slipenv_main
+from slipenv.diagnose import select as selection
+from slipenv.diagnose import workers
+from slipenv.diagnose.cli import diagnose
+from slipenv.diagnose.effects import EFFECTS
+from slipenv.diagnose.fit import Problem, layout, unpack
+from slipenv.diagnose.kinematic import KinematicTruth, kinematic_log
+from slipenv.diagnose.replay import build_segments
+
+
+def _diagnose(log, jobs: int) -> dict:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return diagnose([log], "<kinematic>", jobs=jobs)[0]
+
+
+def test_a_diagnosis_on_two_worker_processes_is_the_one_of_one_process_bit_for_bit(
+        monkeypatch):
+    # right wheel 1.5 % larger, with a torque column: every effect is tried, soil maps
+    # included, and forward selection fits joint models
+    log = kinematic_log(31, KinematicTruth(0.1, 0.1015, 0.5), duration_s=30.0, with_torque=True)
+    steps = []
+    step = selection._step
+    monkeypatch.setattr(selection, "_step", lambda *a: steps.append(a[5]) or step(*a))
+    one = _diagnose(log, 1)
+    two = _diagnose(log, 2)
+    assert one["cause"] == "rolling_radius"
+    tried = {c["cause"] for c in one["candidates"] if c.get("untestable") is None}
+    assert {"soil_map", "soil_patch", "torque_slip"} <= tried
+    assert steps and steps[0] == steps[len(steps) // 2] and "soil_map" in steps[0]
+    assert json.dumps(one, default=repr) == json.dumps(two, default=repr)
+    assert not multiprocessing.active_children()  # the workers ended with the diagnosis
+
+
+def test_every_effects_parameters_cross_to_a_worker_process_and_back():
+    log = kinematic_log(31, KinematicTruth(0.1, 0.1015, 0.5), duration_s=30.0, with_torque=True)
+    seg = build_segments([log])
+    for name in EFFECTS:
+        params = unpack((name,), [b.start for _, b in layout((name,), seg)])
+        assert pickle.loads(pickle.dumps(params)) == params, name
+
+
+def test_the_diagnosis_runs_blas_on_one_thread_and_restores_it_after():
+    before = [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+    with workers.Workers(2):
+        inside = [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+    assert inside and set(inside) == {1}
+    assert [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"] == before
+
+
+def test_a_failing_fit_reaches_the_caller_from_a_worker_and_no_worker_is_left():
+    log = kinematic_log(31, KinematicTruth(0.1, 0.1015, 0.5), duration_s=30.0)
+    problem = Problem.from_segments(build_segments([log]))
+    with workers.Workers(2) as pool:
+        failing = pool.fit(problem, ("no_such_effect",))
+        with pytest.raises(ValueError, match="unknown effect 'no_such_effect'"):
+            failing.result()
+        good = pool.fit(problem, ("track_width",)).result()
+    assert not multiprocessing.active_children()
+    inline = workers.INLINE.fit(problem, ("track_width",)).result()
+    np.testing.assert_array_equal(good.x, inline.x)
+
+
+@pytest.mark.parametrize("jobs", [0, -1, 1.5, True, "2", None])
+def test_a_worker_count_that_is_not_a_whole_number_of_at_least_one_is_refused(jobs):
+    with pytest.raises(ValueError, match="jobs must be a whole number"):
+        workers.Workers(jobs)
+
+
+def test_the_command_line_refuses_zero_jobs_naming_the_option(tmp_path, capsys):
+    assert slipenv_main(["diagnose", str(tmp_path), "--jobs", "0"]) == 2
+    assert "--jobs: must be >= 1, got 0" in capsys.readouterr().err
