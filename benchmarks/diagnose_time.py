@@ -16,6 +16,8 @@ the default on two cores).
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import os
 import tempfile
@@ -57,9 +59,10 @@ def main(argv: list[str] | None = None) -> int:
             for n in jobs:
                 out = Path(tmp) / f"d{n}.json"
                 start = time.perf_counter()
-                code = slipenv_main(["diagnose", str(folder), "--json", str(out), "--jobs",
-                                     str(n), "--report", str(Path(tmp) / f"report_{effect}"),
-                                     "--quiet"])
+                with contextlib.redirect_stdout(io.StringIO()):  # its summary: in the JSON
+                    code = slipenv_main(["diagnose", str(folder), "--json", str(out), "--jobs",
+                                         str(n), "--report",
+                                         str(Path(tmp) / f"report_{effect}"), "--quiet"])
                 times.append((time.perf_counter() - start, code))
                 reports.append(json.loads(out.read_text()) if code == 0 else None)
             if any(r != reports[0] for r in reports):
