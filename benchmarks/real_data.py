@@ -71,6 +71,7 @@ def single_runs(logs) -> None:
           "turn scale c_θ | separable | other sessions' circle runs: final position error "
           "cut |\n|---|---|---|---|---|---|---|")
     named, total, cuts = 0, 0, []
+    per_session: dict[tuple[str, str], list] = defaultdict(lambda: [0, 0, []])
     for log, i in zip(logs, info, strict=True):
         if i["path_type"] not in ("circular", "square"):
             continue
@@ -82,6 +83,9 @@ def single_runs(logs) -> None:
         causes = [rep["cause"], *rep["also"]]
         geometric = bool({"rolling_radius", "track_width"} & set(causes))
         named += geometric
+        session = per_session[(i["path_type"], i["session"])]
+        session[0] += 1
+        session[1] += geometric
         cal = rep.get("calibration")
         cut = "–"
         if cal:
@@ -91,6 +95,7 @@ def single_runs(logs) -> None:
             after = [whole_run(lg, model)[1] for lg in others]
             rel = 1.0 - np.mean(after) / np.mean(before)
             cuts.append(rel)
+            session[2].append(rel)
             cut = f"{1e3 * np.mean(before):.0f} → {1e3 * np.mean(after):.0f} mm ({100 * rel:.0f} %)"
         params = ", ".join(f"{k} = {v[0]:.4f} ± {v[1]:.4f}" for k, v in rep["parameters"].items())
         scale = (f"{cal['determined']['turn_scale'][0]:.4f} ± "
@@ -102,6 +107,14 @@ def single_runs(logs) -> None:
     print(f"\n{named}/{total} single runs drifting > {DRIFT_DEG:g}° get a geometric cause; "
           f"their models cut the other sessions' circle-run final position error by "
           f"{100 * np.mean(cuts):.0f} % on average (median {100 * np.median(cuts):.0f} %)")
+    print("\n| session (path) | runs drifting > 3° | geometric cause named | one-run models: "
+          "other sessions' circle runs' final position error cut, mean (range) |\n"
+          "|---|---|---|---|")
+    for (path, name), (runs, hits, rels) in sorted(per_session.items(),
+                                                   key=lambda kv: kv[0][1]):
+        cut = (f"{100 * np.mean(rels):.0f} % ({100 * min(rels):.0f} to {100 * max(rels):.0f} %)"
+               if rels else "–")
+        print(f"| {name} ({path}) | {runs} | {hits} | {cut} |")
 
 
 def arc_fraction(logs) -> float:

@@ -13,9 +13,10 @@ available (Windows), or with ``jobs=1``, fits run in this process.
 Inside a :class:`Workers` context the BLAS libraries (numpy's and scipy's OpenBLAS) run on one
 thread, in this process and in the workers (``threadpoolctl``): a fit's matrices are small,
 so threads buy little and cost much (two OpenBLAS threads per process made a 5-minute log's
-diagnosis slower, and several processes each with its own threads slower still: they spin on
-shared cores), and how a threaded BLAS splits a sum depends on the machine's core count,
-which would make the standard errors differ in their last digits from machine to machine.
+diagnosis slower, and several processes each with its own threads, contending for the same
+cores, slower still; README), and how a threaded BLAS splits a sum depends on the machine's
+core count, which would make the standard errors differ in their last digits from machine to
+machine.
 """
 
 from __future__ import annotations
