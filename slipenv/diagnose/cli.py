@@ -45,14 +45,17 @@ def diagnose(logs: list[Log], where: str, *, progress: bool = False, jobs: int =
              ) -> tuple[dict, object]:
     """Run the diagnosis on ``logs``; (JSON report, context for the human report).
     ``jobs``: processes the fits run on (``workers.py``; the report does not depend on it)."""
+    from concurrent.futures.process import BrokenProcessPool
+
     import numpy as np
 
     from slipenv.diagnose.fit import FitError, Problem
     from slipenv.diagnose.replay import build_segments
     from slipenv.diagnose.report import build_report
     from slipenv.diagnose.select import select
-    from slipenv.diagnose.workers import one_blas_thread
+    from slipenv.diagnose.workers import check_jobs, one_blas_thread
 
+    jobs = check_jobs(jobs)
     try:
         with one_blas_thread():  # the same numbers on every machine (``workers.py``)
             problem = Problem.from_segments(build_segments(logs))
@@ -61,6 +64,9 @@ def diagnose(logs: list[Log], where: str, *, progress: bool = False, jobs: int =
     except (FitError, np.linalg.LinAlgError, FloatingPointError) as exc:
         names = ", ".join(str(log.path) if log.path else "<memory>" for log in logs)
         raise DiagnosisError(f"{where}: the diagnosis of {names} failed: {exc}") from exc
+    except BrokenProcessPool as exc:  # a worker killed (out of memory, a signal)
+        raise DiagnosisError(f"{where}: a worker process of the diagnosis ended abruptly "
+                             f"({exc}); --jobs 1 runs every fit in this process") from exc
 
 
 class DiagnosisError(ValueError):

@@ -8,7 +8,11 @@ result is first asked for, in the order the selection asks, as it always did.
 
 Workers are forked (``multiprocessing`` "fork" start method), so they see what this process
 has: effects registered at run time (``effects.register``) included. Where fork is not
-available (Windows), or with ``jobs=1``, fits run in this process.
+available (Windows), or with ``jobs=1``, fits run in this process. A fit's inputs are pickled
+here, when it is submitted: inputs that do not pickle (a registered effect whose parameter
+class is defined inside a function) run that fit here, with a warning. Pickled later, in the
+executor's feeder thread, such a failure can leave Python 3.11's executor waiting forever at
+shutdown.
 
 Inside a :class:`Workers` context the BLAS libraries (numpy's and scipy's OpenBLAS) run on one
 thread, in this process and in the workers (``threadpoolctl``): a fit's matrices are small,
@@ -23,6 +27,8 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import pickle
+import warnings
 from collections.abc import Mapping
 from concurrent.futures import Future, ProcessPoolExecutor
 
@@ -67,6 +73,11 @@ class _Later:
         return self._value
 
 
+def _fit_pickled(blob: bytes) -> Fit:
+    """A worker's task: ``fit`` of the pickled arguments."""
+    return fit(*pickle.loads(blob))
+
+
 def one_blas_thread() -> threadpool_limits:
     """BLAS on one thread until the returned context ends (module doc)."""
     return threadpool_limits(1, user_api="blas")
@@ -88,9 +99,16 @@ class Workers:
     def fit(self, problem: Problem, effects: tuple[str, ...], index: np.ndarray | None = None,
             start: Mapping[str, Term] | None = None) -> Future | _Later:
         """``fit.fit(problem, effects, index, start)``, submitted: ``.result()`` gives it."""
+        args = (problem, effects, index, start)
         if self._pool is None:
-            return _Later(problem, effects, index, start)
-        return self._pool.submit(fit, problem, effects, index, start)
+            return _Later(*args)
+        try:
+            blob = pickle.dumps(args, protocol=pickle.HIGHEST_PROTOCOL)
+        except (pickle.PicklingError, AttributeError, TypeError) as exc:
+            warnings.warn(f"a fit of {'+'.join(effects)} runs in this process: its inputs "
+                          f"cannot be sent to a worker ({exc})", RuntimeWarning, stacklevel=2)
+            return _Later(*args)
+        return self._pool.submit(_fit_pickled, blob)
 
     def __enter__(self) -> Workers:
         self._limits = one_blas_thread()

@@ -3,8 +3,10 @@ outcome bit for bit as in one process."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import multiprocessing
+import os
 import pickle
 import warnings
 
@@ -84,3 +86,39 @@ def test_a_worker_count_that_is_not_a_whole_number_of_at_least_one_is_refused(jo
 def test_the_command_line_refuses_zero_jobs_naming_the_option(tmp_path, capsys):
     assert slipenv_main(["diagnose", str(tmp_path), "--jobs", "0"]) == 2
     assert "--jobs: must be >= 1, got 0" in capsys.readouterr().err
+
+
+def _killed(*args) -> None:
+    os._exit(9)  # as the kernel's out-of-memory killer would end a worker
+
+
+def test_a_worker_process_that_dies_is_a_clear_error_naming_the_way_out(monkeypatch):
+    from slipenv.diagnose.cli import DiagnosisError
+
+    log = kinematic_log(31, KinematicTruth(0.1, 0.1015, 0.5), duration_s=30.0)
+    # the workers are forked after this, so they run the patched fit: killed mid-diagnosis
+    monkeypatch.setattr(workers, "fit", _killed)
+    with pytest.raises(DiagnosisError, match="<kinematic>: a worker process .* --jobs 1"):
+        _diagnose(log, 2)
+    assert not multiprocessing.active_children()
+
+
+def test_the_python_entry_refuses_a_bad_worker_count_before_any_work():
+    with pytest.raises(ValueError, match="jobs must be a whole number"):
+        diagnose([], "<nothing>", jobs=0)
+
+
+def test_a_fit_whose_inputs_do_not_pickle_runs_here_with_a_warning_and_the_same_result():
+    from slipenv.diagnose.effects.track_width import TrackWidth
+
+    @dataclasses.dataclass(frozen=True)
+    class LocalWidth(TrackWidth):  # defined in a function: pickle cannot find it
+        pass
+
+    log = kinematic_log(31, KinematicTruth(0.1, 0.1015, 0.5), duration_s=30.0)
+    problem = Problem.from_segments(build_segments([log]))
+    start = {"track_width": LocalWidth(0.51)}
+    with workers.Workers(2) as pool, pytest.warns(RuntimeWarning, match="track_width runs"):
+        here = pool.fit(problem, ("track_width",), None, start).result()
+    np.testing.assert_array_equal(
+        here.x, workers.INLINE.fit(problem, ("track_width",), None, start).result().x)
