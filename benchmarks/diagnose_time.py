@@ -19,13 +19,13 @@ import argparse
 import contextlib
 import io
 import json
-import os
 import tempfile
 import time
 from pathlib import Path
 
 from slipenv.cli import main as slipenv_main
 from slipenv.diagnose.synth import generate
+from slipenv.diagnose.workers import available_cores
 from slipenv.logs import write_log
 
 
@@ -42,8 +42,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--jobs must be comma-separated whole numbers, got {args.jobs!r}")
     if not jobs or min(jobs) < 1:
         parser.error(f"--jobs must be whole numbers >= 1, got {args.jobs!r}")
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    print(f"{cores} core(s) available")
+    print(f"{available_cores()} core(s) available")
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         cases = (("turning_slip", "skid_steer", None), ("soil_patch", "diff_drive", None),

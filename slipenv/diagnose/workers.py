@@ -87,8 +87,8 @@ class Workers:
     """Runs fits: here (``jobs=1``) or on ``jobs`` forked worker processes.
 
     Use as a context manager: inside it BLAS runs on one thread (module doc); the worker
-    processes start with it and end with it (and with the interpreter if a caller forgets).
-    Outside a context, fits run here, with BLAS as the caller has it.
+    processes exist only inside it, so none outlives it. Outside a context, fits run here,
+    with BLAS as the caller has it.
     """
 
     def __init__(self, jobs: int = 1) -> None:
