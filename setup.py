@@ -1,11 +1,10 @@
-"""Compiled hot paths (issue 15), built by ``pip install`` with the machine's C compiler.
+"""Compiled hot paths, built by ``pip install`` with the machine's C compiler.
 
-Everything else about the package is in pyproject.toml. Each extension is optional: if it does
-not compile, installation goes on and slipenv runs the same physics in plain Python (the
-reference the compiled kernels are tested against: `slipenv.sim.compiled`,
-``SLIPENV_PURE_PYTHON``).
-``-ffp-contract=off`` keeps the compiler from fusing a*b+c into one rounding, so the C
-arithmetic rounds exactly as Python's does.
+Everything else about the package is in pyproject.toml. The wheel-soil laws exist once, in C
+(``slipenv/terramechanics/_laws.h``): the per-substep wheel loop (``slipenv.sim._wheel_loop``)
+includes them and ``slipenv.terramechanics._laws`` binds them for the Python API, so both
+extensions are required. ``-ffp-contract=off`` keeps the compiler from fusing a*b+c into one
+rounding, so results do not depend on the target's FMA support.
 """
 
 import sys
@@ -13,14 +12,18 @@ import sys
 from setuptools import Extension, setup
 
 _FLAGS = ["-O2", "-ffp-contract=off", "-fno-fast-math", "-std=c99"]
+_LAWS = "slipenv/terramechanics/_laws.h"
+_LIBM = [] if sys.platform == "win32" else ["m"]
 
 setup(
     ext_modules=[
+        Extension("slipenv.terramechanics._laws", ["slipenv/terramechanics/_laws.c"],
+                  depends=[_LAWS], include_dirs=["slipenv/terramechanics"],
+                  libraries=_LIBM, extra_compile_args=_FLAGS, optional=False),
         Extension("slipenv.sim._wheel_loop", ["slipenv/sim/_wheel_loop.c"],
-                  depends=["slipenv/sim/bullet_native.h"],
-                  libraries=[] if sys.platform == "win32" else ["dl"],
-                  extra_compile_args=_FLAGS, optional=True),
-        Extension("slipenv.estimators.lindgren._ekf", ["estimators/lindgren/_ekf.c"],
-                  extra_compile_args=_FLAGS, optional=True),
+                  depends=["slipenv/sim/bullet_native.h", _LAWS],
+                  include_dirs=["slipenv/terramechanics"],
+                  libraries=_LIBM + ([] if sys.platform == "win32" else ["dl"]),
+                  extra_compile_args=_FLAGS, optional=False),
     ],
 )

@@ -213,8 +213,11 @@ def train(env_id: str, algo: str = "ppo", total_timesteps: int | None = None, se
     vec_cls = SubprocVecEnv if config.n_envs > 1 else DummyVecEnv
     vec = make_vec_env(env_fn, n_envs=config.n_envs, seed=config.seed, vec_env_cls=vec_cls)
     try:
-        kwargs = algo_kwargs_for_sb3(config.hyperparameters, vec.action_space.shape[0],
-                                     hp.noise)
+        action_space = vec.action_space
+        if not isinstance(action_space, gym.spaces.Box):
+            raise TypeError(f"{config.env_id}: {algo} needs a Box action space, got "
+                            f"{action_space}")
+        kwargs = algo_kwargs_for_sb3(config.hyperparameters, action_space.shape[0], hp.noise)
         model = ALGORITHMS[algo](config.policy, vec, seed=config.seed, verbose=0, device="cpu",
                                  **kwargs)
         callbacks: list[BaseCallback] = []

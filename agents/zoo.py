@@ -145,8 +145,8 @@ def parse(entry: dict[str, Any], algo_cls: type, where: str) -> Hyperparams:
         if noise[0] not in ("normal", "ornstein-uhlenbeck"):
             raise ValueError(f"{where}: noise_type {noise[0]!r} unknown; "
                              "use 'normal' or 'ornstein-uhlenbeck'")
-    params = inspect.signature(algo_cls.__init__).parameters
-    allowed = set(params) - {"self", "policy", "env"}
+    params = inspect.signature(algo_cls).parameters  # the constructor's, without self
+    allowed = set(params) - {"policy", "env"}
     hp = Hyperparams(
         n_timesteps=int(float(entry.pop("n_timesteps", 100_000))),
         n_envs=int(entry.pop("n_envs", 1)), policy=str(entry.pop("policy", "MlpPolicy")),

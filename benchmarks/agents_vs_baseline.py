@@ -8,7 +8,7 @@
    env steps with 2 env processes, then evaluated with :func:`slipenv.evaluation.evaluator`
    next to the baseline on held-out seeds (1000, 1001, ...; training uses 0 and 1) on the
    training soil and on a held-out soil (loose sand, never seen in training). Metrics are
-   from the true pose. The target of issue 12 is >= 20 % lower true cross-track RMSE than the
+   from the true pose. The target is >= 20 % lower true cross-track RMSE than the
    baseline on the held-out soil; the script prints the change whichever way it comes out.
 
 Budget: the defaults (``--timesteps 120000`` per env, 5 held-out seeds) take about 30 minutes

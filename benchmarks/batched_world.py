@@ -1,4 +1,4 @@
-"""Does one PyBullet world carrying N vehicles pay against N worlds? (issue 15, item 4)
+"""Does one PyBullet world carrying N vehicles pay against N worlds?
 
 N copies of slipenv's Husky (``vehicle_by_name("husky")``, built by
 :func:`slipenv.vehicles.body.build_vehicle` as the env builds it) on pybullet_data's plane,

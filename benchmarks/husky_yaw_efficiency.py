@@ -1,4 +1,4 @@
-"""The simulated Husky's skid-steer yaw efficiency against BorealTC's sandy loam (issue 16, item 8).
+"""The simulated Husky's skid-steer yaw efficiency against BorealTC's sandy loam.
 
 BorealTC (docs/real_data.md, `slipenv diagnose` proprioceptive analysis) measures the yaw
 efficiency eta = (gyro yaw rate) / ((v_R - v_L)/B), with v = r omega from the wheel encoders and

@@ -1,4 +1,4 @@
-"""Cost of each part of the per-substep force injection (issue 15, item 2).
+"""Cost of each part of the per-substep force injection.
 
 For each env id: the env is reset (seed 0) and driven ``--warmup`` steps with a constant action
 so that the wheels are loaded; then, interleaved over ``--repeats`` rounds (so that load from
@@ -14,15 +14,16 @@ other processes hits all alike), in microseconds per physics substep:
 * ``apply_external_force``: one call's cost times the calls per substep actually made (counted
   in the in-situ loop);
 * ``compute``: apply_total minus the queries and the force calls: the frame, slip and force
-  law, compiled (``slipenv/sim/_wheel_loop.c``) or, with ``SLIPENV_PURE_PYTHON=1``, in Python;
-* ``apply_native`` and ``apply_python_api``: ``apply`` in situ with the compiled loop reading
-  PyBullet through Bullet's C API (``slipenv/sim/bullet_native.h``) and through pybullet's
-  Python functions, alternated in each round (NaN without the compiled loop or native access).
-  The query and force columns above are the Python API's costs, which the native path avoids.
+  laws (``slipenv/terramechanics/_laws.h``, run by the loop ``slipenv/sim/_wheel_loop.c``);
+* ``apply_native`` and ``apply_python_api``: ``apply`` in situ with the loop reading PyBullet
+  through Bullet's C API (``slipenv/sim/bullet_native.h``) and through pybullet's Python
+  functions (``SLIPENV_PYBULLET_API=1``), alternated in each round (NaN without native
+  access). The query and force columns above are the Python API's costs, which the native
+  path avoids.
 
 and, for deciding what to cut, alternatives (``alt_*``, not part of the sum): link states
 without velocities (one call), the three queries with keyword arguments (their sum, as the
-code before issue 15 called them), one ``applyExternalForce`` with keyword arguments and one
+code once called them), one ``applyExternalForce`` with keyword arguments and one
 ``applyExternalTorque`` (what a force moved to another point would need for its moment).
 Medians over rounds. Run from the repository root::
 
@@ -67,11 +68,11 @@ def _forces_applied(injector) -> int:
 
 def _in_situ(env: gym.Env, action: np.ndarray, steps: int) -> tuple[float, float, float]:
     """(apply µs per substep, stepSimulation µs per substep, applyExternalForce calls per
-    substep) over ``steps`` env steps, timing the loop that runs (compiled or Python)."""
+    substep) over ``steps`` env steps."""
     sim = env.unwrapped._sim
     injector = sim.injector
     spent = {"apply": 0.0, "step": 0.0, "calls": 0}
-    had_own = "apply" in vars(injector)  # the compiled loop is bound on the instance
+    had_own = "apply" in vars(injector)  # the loop's apply is bound on the instance
     inner_apply = injector.apply
     inner_step = p.stepSimulation
 
@@ -145,7 +146,7 @@ def measure(env_id: str, steps: int, repeats: int, warmup: int = 20,
         action.flat[0] = 0.5 * float(env.action_space.high.flat[0])
         for _ in range(warmup):
             env.step(action)
-        loop = env.unwrapped._sim.injector._loop
+        loop = getattr(env.unwrapped._sim.injector, "_loop", None)
         native = loop is not None and bool(loop.native)
         rounds: list[dict[str, float]] = []
         for _ in range(repeats):

@@ -12,7 +12,7 @@
    the first logged pose): the mean cut of their final position error.
 6. OptiOdom, whole sessions (``--sessions``): the model diagnosed on one session folder (all
    its runs together) applied to the *other* sessions' circle (arc) runs, dead-reckoned whole:
-   the cut of their mean final position error, per session and on average (issue 14 asks for
+   the cut of their mean final position error, per session and on average (the target is
    at least 50 %); and the same with only what the session determines for arcs applied (a
    session that turns on the spot determines the distance scale, not the turn scale of arcs).
 7. BorealTC (no ground truth): yaw efficiency per terrain (``slipenv.diagnose.proprio``).

@@ -1,4 +1,4 @@
-"""Vectorised throughput: env steps/s with 1, 2 and 4 worker processes (issue 15, item 4).
+"""Vectorised throughput: env steps/s with 1, 2 and 4 worker processes.
 
 Measures, for one env id (default ``slipenv/HuskySand-v0``), total env steps per second of
 

@@ -106,18 +106,20 @@ class YamauchiController(Controller):
                           "may oscillate", RuntimeWarning, stacklevel=2)
 
     @classmethod
-    def from_poles(cls, pole_rps: float, speed_mps: float, **kw: float | bool,
+    def from_poles(cls, pole_rps: float, speed_mps: float, *, v_max_mps: float,
+                   omega_max_rps: float, dt_s: float, use_feedforward: bool = True,
                    ) -> YamauchiController:
         """Gains placing a triple closed-loop pole at ``-pole_rps`` for ``speed_mps``.
 
-        (s + p)³ = s³ + 3p s² + 3p² s + p³, so k_ω = 3p, k_φ = 3p², k_η = p³ / v.
-        ``kw`` carries ``v_max_mps``, ``omega_max_rps``, ``dt_s`` and ``use_feedforward``.
+        (s + p)³ = s³ + 3p s² + 3p² s + p³, so k_ω = 3p, k_φ = 3p², k_η = p³ / v. The limits,
+        ``dt_s`` and ``use_feedforward`` are the constructor's.
         """
         for name, value in (("pole_rps", pole_rps), ("speed_mps", speed_mps)):
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"{name} must be finite and > 0, got {value!r}")
         p = float(pole_rps)
-        return cls(k_eta=p**3 / speed_mps, k_phi=3.0 * p**2, k_omega=3.0 * p, **kw)
+        return cls(v_max_mps, omega_max_rps, dt_s, k_eta=p**3 / speed_mps, k_phi=3.0 * p**2,
+                   k_omega=3.0 * p, use_feedforward=use_feedforward)
 
     def characteristic_polynomial(self, speed_mps: float) -> np.ndarray:
         """Coefficients [1, k_ω, k_φ, k_η v] of the linearised closed loop at ``speed_mps``."""

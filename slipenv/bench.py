@@ -16,9 +16,12 @@ action: the first ``WARMUP_STEPS`` steps (caches, first contacts) are not timed;
 :class:`StepTimer` recorder saves the world's state when timing starts and times the rest; the
 bare chunk then restores that state and steps it as often as the env chunk did substeps.
 Warnings and log records emitted while benchmarking (an estimator skipping measurements, ...)
-are collected and counted, not printed in the middle of the table.
+are collected and counted, not printed in the middle of the table. ``pybullet_path`` says how
+each env's force injection read PyBullet in the timed rollouts (:func:`pybullet_path`):
+``"native"`` (Bullet's C API, `slipenv.sim.bullet_native`), ``"public API"`` (pybullet's Python
+functions) or ``"mixed"`` (a check of the native reader failed in some rollouts).
 
-Three more figures per env (issue 15):
+Three more figures per env:
 
 * ``coulomb_env_steps_per_s``: what a user would run without slipenv on the very same world
   (same bodies, restored to the same state): slipenv's force injection off, PyBullet's own
@@ -38,8 +41,8 @@ Three more figures per env (issue 15):
   ~0.3 µs per call, so this rollout is not the one the ratio is taken from.
 * ``injection_parts_us_per_substep``: from the same rollout, the compiled wheel loop's own
   timing of its substeps (``WheelLoop.timings``), in microseconds per substep: ``read`` (the
-  contact, link and joint queries, through Bullet's C API when ``native_queries`` is true,
-  `slipenv.sim.bullet_native`), ``force_law`` (contact frames, slip states, force law, dampers
+  contact, link and joint queries, natively or through the public API as ``pybullet_path``
+  says), ``force_law`` (contact frames, slip states, force law, dampers
   and resistance) and ``apply`` (the ``applyExternalForce`` commands); None without the
   compiled loop.
 * ``vec_env_steps_per_s``: total env steps/s of ``gymnasium.make_vec(id, VEC_PROCESSES,
@@ -65,6 +68,7 @@ import time
 import warnings
 from collections import Counter
 from collections.abc import Iterator
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -72,7 +76,7 @@ import numpy as np
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.rollout import rollout
 
-p = import_pybullet()
+p: Any = import_pybullet()  # a C module: its functions are wrapped by name below
 
 WARMUP_STEPS = 10
 """Env steps after each reset that are not timed (caches, first contacts)."""
@@ -127,13 +131,14 @@ def bench_env(env_id: str, steps: int = 200, repeats: int = 5, vec: bool = True)
         raise ValueError(f"steps and repeats must be >= 1, got steps={steps}, repeats={repeats}")
     env = gym.make(env_id)
     try:
-        base = env.unwrapped
+        base: Any = env.unwrapped  # a slipenv env: its own attributes are read
         client, substeps = base.physics_client_id, base.substeps_per_step
         timer = StepTimer(client)
-        env_rates, bare_rates, coulomb_rates = [], [], []
+        env_rates, bare_rates, coulomb_rates, paths = [], [], [], set()
         for _ in range(repeats):
             rollout(env, lambda _obs: BENCH_ACTION, seed=0, max_steps=WARMUP_STEPS + steps,
                     recorders=[timer])
+            paths.add(pybullet_path(base))
             if timer.state_id is None or timer.steps == 0:
                 raise ValueError(f"{env_id}: the episode ended within the {WARMUP_STEPS} "
                                  "warm-up steps; nothing to time")
@@ -164,8 +169,7 @@ def bench_env(env_id: str, steps: int = 200, repeats: int = 5, vec: bool = True)
         }
         result["breakdown_us_per_step"], parts = step_breakdown_and_parts(env, steps)
         result["injection_parts_us_per_substep"] = parts
-        result["native_queries"] = bool(getattr(getattr(_internal(base, "_sim"), "injector", None),
-                                                "native_queries", False))
+        result["pybullet_path"] = paths.pop() if len(paths) == 1 else "mixed"
     finally:
         env.close()
     if vec:
@@ -254,6 +258,15 @@ class _Timers:
 _CLASS_METHOD = object()  # marks an attribute the instance did not hold itself
 
 
+def pybullet_path(env: gym.Env) -> str:
+    """How the env's force injection reads PyBullet now: ``"native"`` (Bullet's C API,
+    `slipenv.sim.bullet_native`) or ``"public API"`` (pybullet's Python functions: forced by
+    ``SLIPENV_PYBULLET_API=1``, an unlisted pybullet, a failed check, or an injector without
+    the native reader)."""
+    injector = getattr(_internal(env, "_sim"), "injector", None)
+    return "native" if getattr(injector, "native_queries", False) else "public API"
+
+
 def _internal(obj, name: str):
     """An attribute the benchmark instruments although it is not public API (the env's
     simulator, sensors and observation): read by name so the layering test's rule against
@@ -311,7 +324,7 @@ class _BreakdownRecorder:
 
     def on_reset(self, env: gym.Env, obs: np.ndarray, info: dict) -> None:
         self.unwrap()
-        base = env.unwrapped
+        base: Any = env.unwrapped
         sim = _internal(base, "_sim")
         injector = getattr(sim, "injector", None)
         self.instrument(injector, "apply", "force_injection")
@@ -502,7 +515,7 @@ def format_bench(result: dict) -> str:
     counting the warnings collected."""
     head = (f"{'env id':<32} {'env steps/s':>12} {'substeps':>9} {'bare substeps/s':>16} "
             f"{'ratio':>6} {'x realtime':>10} {'coulomb steps/s':>16} {'vs coulomb':>10} "
-            f"{'vec steps/s':>12}")
+            f"{'vec steps/s':>12}  PyBullet read")
     lines = [head, "-" * len(head)]
     for env_id, r in result["envs"].items():
         coulomb = r.get("coulomb_env_steps_per_s")
@@ -513,6 +526,7 @@ def format_bench(result: dict) -> str:
             + (f" {coulomb:>16.1f} {r['vs_coulomb']:>10.2f}" if coulomb is not None
                else f" {'-':>16} {'-':>10}")
             + (f" {vec:>12.1f}" if vec is not None else f" {'-':>12}")
+            + f"  {r.get('pybullet_path', '-')}"
         )
     rows = [(env_id, r["breakdown_us_per_step"]) for env_id, r in result["envs"].items()
             if r.get("breakdown_us_per_step")]
@@ -525,15 +539,15 @@ def format_bench(result: dict) -> str:
         lines += ["", head2, "-" * len(head2)]
         for env_id, b in rows:
             lines.append(f"{env_id:<32}" + "".join(f" {b[k]:>10.1f}" for k in BREAKDOWN_KEYS))
-    parts = [(env_id, r["injection_parts_us_per_substep"], r.get("native_queries"))
+    parts = [(env_id, r["injection_parts_us_per_substep"])
              for env_id, r in result["envs"].items() if r.get("injection_parts_us_per_substep")]
     if parts:
         head3 = (f"{'force injection, us per substep':<32} {'read':>10} {'force law':>10} "
-                 f"{'apply':>10}  PyBullet read through")
+                 f"{'apply':>10}")
         lines += ["", head3, "-" * len(head3)]
-        for env_id, q, native in parts:
+        for env_id, q in parts:
             lines.append(f"{env_id:<32} {q['read']:>10.2f} {q['force_law']:>10.2f} "
-                         f"{q['apply']:>10.2f}  {'C API' if native else 'Python API'}")
+                         f"{q['apply']:>10.2f}")
     start = result.get("startup")
     if start:
         slowest = max(start["first_make_s"].items(), key=lambda kv: kv[1])
@@ -542,10 +556,6 @@ def format_bench(result: dict) -> str:
         lines += ["", f"startup: import slipenv {start['import_s']:.2f} s; first make + reset + "
                   f"step {min(start['first_make_s'].values()):.2f}-{slowest[1]:.2f} s "
                   f"(slowest {slowest[0]}); {kernels}"]
-        native = [r["native_queries"] for r in result["envs"].values() if "native_queries" in r]
-        if native:
-            lines[-1] += (f"; PyBullet read through Bullet's C API in "
-                          f"{sum(native)}/{len(native)} envs")
     caught = result.get("warnings", {})
     if caught.get("count"):
         first = next(iter(caught["messages"]))

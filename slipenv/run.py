@@ -20,6 +20,7 @@ import numpy as np
 from slipenv.contracts.angles import wrap_angle
 from slipenv.controllers.baseline import BASELINE_NAMES, baseline_controller
 from slipenv.envs.estimation import odometry_geometry
+from slipenv.envs.slip_env import SlipEnv
 from slipenv.estimators.dead_reckoning import DeadReckoning
 from slipenv.rollout import RolloutResult, Trajectory, TrajectoryRecorder, rollout
 
@@ -60,6 +61,8 @@ class EpisodeRecorder:
     def on_reset(self, env: gym.Env, obs: np.ndarray, info: dict) -> None:
         self.trajectory.on_reset(env, obs, info)
         base = env.unwrapped
+        if not isinstance(base, SlipEnv):
+            raise TypeError(f"EpisodeRecorder records a SlipEnv, got {type(base).__name__}")
         self._naive = DeadReckoning(odometry_geometry(base.vehicle))
         self._naive.reset(*info["true_pose"], info["sensors"])
         self._naive_xy = []
@@ -122,7 +125,10 @@ def run_episode(env_id: str, seed: int = 0, controller: str = "yamauchi",
         if progress:
             from tqdm import tqdm
 
-            total = max_steps or env.spec.max_episode_steps or env.unwrapped.max_steps
+            base = env.unwrapped
+            assert isinstance(base, SlipEnv)  # baseline_controller has checked it
+            limit = None if env.spec is None else env.spec.max_episode_steps
+            total = max_steps or limit or base.max_steps
             bar = tqdm(total=total, desc=env_id, unit="step", leave=False)
         result = rollout(env, policy, seed=seed, max_steps=max_steps, recorders=[recorder],
                          progress=bar)

@@ -1,4 +1,4 @@
-"""The import rules of the package (README, Architecture), checked on the source with ``ast``.
+"""The import rules of the package (docs/architecture.md), checked on the source with ``ast``.
 
 Layers, lowest first; a module may import its own layer's modules and lower layers only:
 

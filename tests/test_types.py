@@ -1,6 +1,6 @@
-"""Static types of the typed core: mypy, configured in pyproject.toml ``[tool.mypy]``, passes on
-its ``files`` (contracts, terramechanics, estimators), and the same configuration does catch a
-wrong annotation.
+"""Static types of every package: mypy, configured in pyproject.toml ``[tool.mypy]``, passes on
+its ``files`` (every package folder the distribution installs: slipenv, estimators, controllers,
+agents), and the same configuration does catch a wrong annotation.
 
 mypy runs from the repository root: ``slipenv`` is installed editable through an import hook
 that mypy does not follow, so outside the root it would see every ``slipenv`` import as missing
@@ -30,7 +30,14 @@ def configured_sources() -> list[pathlib.Path]:
     return sorted(p for f in files for p in (ROOT / f).rglob("*.py"))
 
 
-def test_typed_core_passes_mypy_with_the_project_configuration():
+def test_mypy_checks_every_package_folder_the_distribution_installs():
+    tool = tomllib.loads(CONFIG.read_text())["tool"]
+    installed = set(tool["setuptools"]["package-dir"].values())
+    assert {"slipenv", "estimators"} <= installed
+    assert set(tool["mypy"]["files"]) == installed
+
+
+def test_every_package_passes_mypy_with_the_project_configuration():
     sources = configured_sources()
     assert any("contracts" in p.parts for p in sources)
     assert any(p.parts[-2:] == ("estimators", "__init__.py") for p in sources)

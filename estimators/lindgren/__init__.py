@@ -6,7 +6,11 @@ Modules, in reading order:
 - :mod:`.models`: the state layout and the process model (Eq. 12-13) as plain functions;
 - :mod:`.observations`: the observation models and Jacobians (Eq. 14-17, 37-41);
 - :mod:`.params`: the four schemes of §5 and the noise set;
-- :mod:`.ekf`: :class:`LindgrenEKF`, the filter that strings them together.
+- :mod:`.kernel`: one frame's predictions and Kalman updates (Eq. 6-11) with those models;
+- :mod:`.ekf`: :class:`LindgrenEKF`, the filter around it (validation, skips, history).
+
+The models and the kernel are the only implementation, compiled from their Python text by
+numba (``@njit(cache=True)``; ``NUMBA_DISABLE_JIT=1`` runs the same text as plain Python).
 """
 
 from .ekf import SENSORS, LindgrenEKF

@@ -1,11 +1,11 @@
 """State layout and process model of Lindgren's navigation EKF, as plain functions.
 
 Every function takes the state vector ``x`` first and returns a prediction or its Jacobian, so
-the filter (:mod:`slipenv.estimators.lindgren.ekf`), the synthetic data generator
-(:mod:`tests.estimators.lindgren_synth`) and the tests share one copy of the maths (Lindgren, Hague,
-Probert Smith and Marchant, "Relating torque and slip in an odometric model for an autonomous
-agricultural vehicle", Eq. 12-13 and §4). The observation models (Eq. 14-17, 37-41) are in
-:mod:`slipenv.estimators.lindgren.observations`.
+the filter (:mod:`slipenv.estimators.lindgren.ekf`, through :mod:`.kernel`), the synthetic
+data generator (:mod:`tests.estimators.lindgren_synth`) and the tests share one copy of the
+maths (Lindgren, Hague, Probert Smith and Marchant, "Relating torque and slip in an odometric
+model for an autonomous agricultural vehicle", Eq. 12-13 and §4). The observation models
+(Eq. 14-17, 37-41) are in :mod:`slipenv.estimators.lindgren.observations`.
 
 State (Lindgren Eq. 12, extended for the slip-aware model of §4)::
 
@@ -42,6 +42,10 @@ Departures from the paper, each for a stated reason:
   change as the vehicle yaws on a tilted plane (the coupling the paper applies to α2, here as
   an exact rotation so that it stays bounded at any yaw rate), and observed by the
   inclinometer when the frame has one.
+
+Speed: these functions are the code the filter runs. ``@njit(cache=True)`` compiles this same
+text with numba (the compiled machine code is cached in ``__pycache__``, so only the first run
+on a machine pays the compile); ``NUMBA_DISABLE_JIT=1`` runs it as the plain Python it reads as.
 """
 
 from __future__ import annotations
@@ -50,6 +54,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
+
+from slipenv.contracts import wrap_angle
 
 G_MPS2 = 9.80665  # standard gravity [m/s²]; Eq. 14 accelerations are in units of g
 
@@ -59,6 +66,10 @@ N_BASE = 9  # the paper's state, Eq. 12
 N_SLIP = 13  # plus R_w and k_s per wheel, §4
 STATE_NAMES = ("x", "y", "theta", "v", "omega", "v_dot", "omega_dot", "alpha1", "alpha2",
                "R_wl", "R_wr", "k_sl", "k_sr")
+
+
+# the contracts' angle wrap to (-π, π], compiled for the filter's compiled code
+wrap = njit(cache=True)(wrap_angle)
 
 
 @dataclass(frozen=True)
@@ -83,10 +94,15 @@ class OracleSoil:
                 raise ValueError(f"OracleSoil.{name} must be two finite values > 0, got {value!r}")
             object.__setattr__(self, name, value)
 
+    def as_array(self) -> np.ndarray:
+        """``[R_wl, R_wr, k_sl, k_sr]``, the form the compiled observation models take."""
+        return np.array([*self.wheel_radius_m, *self.k_s])
+
 
 # ---------------------------------------------------------------------------------------------
 # Process model (Eq. 13) and process noise
 # ---------------------------------------------------------------------------------------------
+@njit(cache=True)
 def process_fx(x: np.ndarray, tau: float) -> np.ndarray:
     """Predict the state τ seconds ahead (Lindgren Eq. 13, second-order integration).
 
@@ -119,6 +135,7 @@ def process_fx(x: np.ndarray, tau: float) -> np.ndarray:
     return xp
 
 
+@njit(cache=True)
 def process_F(x: np.ndarray, tau: float) -> np.ndarray:
     """Jacobian ``F = ∂f/∂x`` of :func:`process_fx` (Lindgren Eq. 7), shape (n, n)."""
     n = x.shape[0]
@@ -143,22 +160,24 @@ def process_F(x: np.ndarray, tau: float) -> np.ndarray:
     F[IV, IVD] = tau
     F[IOM, IOMD] = tau
     cd, sd = math.cos(dth), math.sin(dth)
-    F[IA1, IA1], F[IA1, IA2], F[IA2, IA1], F[IA2, IA2] = cd, -sd, sd, cd
+    F[IA1, IA1] = cd
+    F[IA1, IA2] = -sd
+    F[IA2, IA1] = sd
+    F[IA2, IA2] = cd
     da1 = -sd * x[IA1] - cd * x[IA2]  # ∂α1'/∂(Δθ)
     da2 = cd * x[IA1] - sd * x[IA2]  # ∂α2'/∂(Δθ)
-    F[IA1, IOM], F[IA1, IOMD] = tau * da1, 0.5 * tau * tau * da1
-    F[IA2, IOM], F[IA2, IOMD] = tau * da2, 0.5 * tau * tau * da2
+    F[IA1, IOM] = tau * da1
+    F[IA1, IOMD] = 0.5 * tau * tau * da1
+    F[IA2, IOM] = tau * da2
+    F[IA2, IOMD] = 0.5 * tau * tau * da2
     return F
 
 
-_YAW_CHAIN = np.ix_((ITH, IOM, IOMD), (ITH, IOM, IOMD))  # the (θ, Ω, Ω̇) block of Q
-
-
+@njit(cache=True)
 def jerk_block(tau: float, psd: float) -> np.ndarray:
     """Discretised continuous white-jerk noise for a (position, rate, acceleration) chain.
 
-    Equals ``filterpy.common.Q_continuous_white_noise(3, tau, psd)`` (tested), written out
-    because it is called at every prediction.
+    Equals ``filterpy.common.Q_continuous_white_noise(3, tau, psd)`` (tested).
 
     Parameters
     ----------
@@ -173,11 +192,14 @@ def jerk_block(tau: float, psd: float) -> np.ndarray:
     """
     t2 = tau * tau
     t3 = t2 * tau
-    return psd * np.array([[t3 * t2 / 20.0, t2 * t2 / 8.0, t3 / 6.0],
-                           [t2 * t2 / 8.0, t3 / 3.0, t2 / 2.0],
-                           [t3 / 6.0, t2 / 2.0, tau]])
+    q = np.empty((3, 3))
+    q[0, 0], q[0, 1], q[0, 2] = psd * t3 * t2 / 20.0, psd * t2 * t2 / 8.0, psd * t3 / 6.0
+    q[1, 1], q[1, 2], q[2, 2] = psd * t3 / 3.0, psd * t2 / 2.0, psd * tau
+    q[1, 0], q[2, 0], q[2, 1] = q[0, 1], q[0, 2], q[1, 2]
+    return q
 
 
+@njit(cache=True)
 def process_Q(
     x: np.ndarray,
     tau: float,
@@ -221,14 +243,23 @@ def process_Q(
     Q = np.zeros((n, n))
     v_bar = x[IV] + 0.5 * tau * x[IVD]
     th_mid = x[ITH] + 0.5 * tau * (x[IOM] + 0.5 * tau * x[IOMD])
-    u = np.array([math.cos(th_mid), math.sin(th_mid)])
+    u = (math.cos(th_mid), math.sin(th_mid))
     qv = jerk_block(tau, jerk_psd_v)
-    # along-track chain: (s, v, v̇) with s laid along u in (x, y)
-    Q[0:2, 0:2] = qv[0, 0] * np.outer(u, u)
-    Q[0:2, IV] = Q[IV, 0:2] = qv[0, 1] * u
-    Q[0:2, IVD] = Q[IVD, 0:2] = qv[0, 2] * u
-    Q[IV, IV], Q[IV, IVD], Q[IVD, IV], Q[IVD, IVD] = qv[1, 1], qv[1, 2], qv[2, 1], qv[2, 2]
-    Q[_YAW_CHAIN] = jerk_block(tau, jerk_psd_omega)
+    qw = jerk_block(tau, jerk_psd_omega)
+    yaw = (ITH, IOM, IOMD)  # the (θ, Ω, Ω̇) chain
+    for a in range(3):
+        for b in range(3):
+            Q[yaw[a], yaw[b]] = qw[a, b]
+    # the along-track chain (s, v, v̇), with the distance s laid along u in (x, y)
+    speed = (IV, IVD)
+    for a in range(2):
+        for b in range(2):
+            Q[speed[a], speed[b]] = qv[1 + a, 1 + b]
+    for i in range(2):
+        for j in range(2):
+            Q[i, j] = qv[0, 0] * u[i] * u[j]
+        for b in range(2):
+            Q[i, speed[b]] = Q[speed[b], i] = qv[0, 1 + b] * u[i]
     Q[IA1, IA1] = Q[IA2, IA2] = tilt_psd * tau
     if n == N_SLIP:
         d = abs(v_bar) * tau

@@ -17,13 +17,20 @@ Departures from the paper, each for a stated reason:
   ``σ T / k_s`` so that driving torque makes the wheel overspin in reverse as well; for
   forward travel σ = 1 and the formula is the paper's.
 * The paper writes Γ for radians per count; here the geometry's ``counts_per_rad`` = 1/Γ.
+
+Like :mod:`.models`, these functions are the code the filter runs, compiled from this text by
+numba (``@njit(cache=True)``). The oracle's fixed soil is passed to the slip model as the array
+``[R_wl, R_wr, k_sl, k_sr]`` (:meth:`.models.OracleSoil.as_array`) because compiled code takes
+arrays, not dataclasses. They are written per wheel in plain loops rather than as numpy array
+expressions: numba compiles loops several times faster.
 """
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
-from slipenv.contracts import wrap_angles
+import numpy as np
+from numba import njit
 
 from .models import (
     G_MPS2,
@@ -40,13 +47,17 @@ from .models import (
     IVD,
     IX,
     IY,
-    OracleSoil,
+    N_SLIP,
+    wrap,
 )
+
+NO_SOIL = np.zeros(0)  # the ``soil`` argument of the 13-state slip model, which reads x
 
 
 # ---------------------------------------------------------------------------------------------
 # Inertial observation (Eq. 14) and inclinometer
 # ---------------------------------------------------------------------------------------------
+@njit(cache=True)
 def ins_hx(x: np.ndarray) -> np.ndarray:
     """Predicted inertial readings ``[a1/g, a2/g, g1]`` (Lindgren Eq. 14).
 
@@ -55,11 +66,14 @@ def ins_hx(x: np.ndarray) -> np.ndarray:
     np.ndarray, shape (3,)
         Forward and lateral specific force [g] and yaw rate [rad/s].
     """
-    return np.array([x[IVD] / G_MPS2 + x[IA1],
-                     x[IV] * x[IOM] / G_MPS2 - x[IA2],
-                     x[IOM]])
+    h = np.empty(3)
+    h[0] = x[IVD] / G_MPS2 + x[IA1]
+    h[1] = x[IV] * x[IOM] / G_MPS2 - x[IA2]
+    h[2] = x[IOM]
+    return h
 
 
+@njit(cache=True)
 def ins_H(x: np.ndarray) -> np.ndarray:
     """Jacobian of :func:`ins_hx`, shape (3, n)."""
     H = np.zeros((3, x.shape[0]))
@@ -72,14 +86,16 @@ def ins_H(x: np.ndarray) -> np.ndarray:
     return H
 
 
+@njit(cache=True)
 def tilt_hx(x: np.ndarray) -> np.ndarray:
     """Predicted inclinometer reading ``[α1, α2]`` [rad] in Lindgren's signs, shape (2,).
 
     ``SensorFrame`` reports ``pitch_rad = -α1`` and ``roll_rad = -α2`` (REP 103).
     """
-    return np.array([x[IA1], x[IA2]])
+    return x[IA1:IA2 + 1].copy()
 
 
+@njit(cache=True)
 def tilt_H(x: np.ndarray) -> np.ndarray:
     """Jacobian of :func:`tilt_hx`, shape (2, n)."""
     H = np.zeros((2, x.shape[0]))
@@ -90,16 +106,27 @@ def tilt_H(x: np.ndarray) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------
 # Odometric observations (Eq. 15-16 and the slip-aware Eq. 37-41)
 # ---------------------------------------------------------------------------------------------
-_SIDES = np.array([-1.0, 1.0])  # the ∓ of Eq. 16: left wheel -W/2 Ω, right wheel +W/2 Ω
+SIDES = (-1.0, 1.0)  # the ∓ of Eq. 16: left wheel -W/2 Ω, right wheel +W/2 Ω
 
 
-def _wheel_speeds(x: np.ndarray, tau: float, track_width_m: float) -> np.ndarray:
+@njit(cache=True)
+def wheel_speeds(x: np.ndarray, tau: float, track_width_m: float) -> np.ndarray:
     """Mean ground speed of the (left, right) wheel over the interval ending at x [m/s]."""
     v_mid = x[IV] - 0.5 * tau * x[IVD]
     om_mid = x[IOM] - 0.5 * tau * x[IOMD]
-    return v_mid + _SIDES * (0.5 * track_width_m) * om_mid
+    v_w = np.empty(2)
+    for i in range(2):
+        v_w[i] = v_mid + SIDES[i] * (0.5 * track_width_m) * om_mid
+    return v_w
 
 
+@njit(cache=True)
+def travel_sign(v_w: float) -> float:
+    """σ = sign of a wheel's ground speed, +1 at rest (the slip model's direction)."""
+    return 1.0 if v_w >= 0.0 else -1.0
+
+
+@njit(cache=True)
 def odo_hx(
     x: np.ndarray, tau: float, radius_m: float, track_width_m: float, counts_per_rad: float
 ) -> np.ndarray:
@@ -125,42 +152,54 @@ def odo_hx(
     np.ndarray, shape (2,)
         Counts of the (left, right) wheel over the interval.
     """
-    return tau * counts_per_rad / radius_m * _wheel_speeds(x, tau, track_width_m)
+    v_w = wheel_speeds(x, tau, track_width_m)
+    z = np.empty(2)
+    for i in range(2):
+        z[i] = tau * counts_per_rad / radius_m * v_w[i]
+    return z
 
 
+@njit(cache=True)
 def odo_H(
     x: np.ndarray, tau: float, radius_m: float, track_width_m: float, counts_per_rad: float
 ) -> np.ndarray:
     """Jacobian of :func:`odo_hx`, shape (2, n)."""
     H = np.zeros((2, x.shape[0]))
     g = tau * counts_per_rad / radius_m
-    H[:, IV] = g
-    H[:, IOM] = g * _SIDES * 0.5 * track_width_m
-    H[:, IVD] = -0.5 * tau * H[:, IV]
-    H[:, IOMD] = -0.5 * tau * H[:, IOM]
+    for i in range(2):
+        H[i, IV] = g
+        H[i, IOM] = g * SIDES[i] * 0.5 * track_width_m
+        H[i, IVD] = -0.5 * tau * H[i, IV]
+        H[i, IOMD] = -0.5 * tau * H[i, IOM]
     return H
 
 
-def slip_params(x: np.ndarray, soil: OracleSoil | None) -> tuple[np.ndarray, np.ndarray]:
-    """(R_w, k_s) per wheel, each shape (2,): from the state, or fixed by ``soil``."""
-    if soil is not None:
-        return np.asarray(soil.wheel_radius_m), np.asarray(soil.k_s)
-    return x[IRL:IRR + 1], x[IKL:IKR + 1]
+@njit(cache=True)
+def slip_params(x: np.ndarray, soil: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(R_w, k_s) per wheel, each shape (2,): the states of a 13-state ``x``, else the oracle's
+    fixed ``soil = [R_wl, R_wr, k_sl, k_sr]``."""
+    if x.shape[0] == N_SLIP:
+        return x[IRL:IRR + 1], x[IKL:IKR + 1]
+    return soil[0:2], soil[2:4]
 
 
+@njit(cache=True)
 def wheel_slip(
-    x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: float,
-    soil: OracleSoil | None = None,
+    x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: float, soil: np.ndarray,
 ) -> np.ndarray:
     """Longitudinal slip ``s = σ T / k_s`` of the (left, right) wheel (Lindgren Eq. 24, 32)."""
     _, k_s = slip_params(x, soil)
-    sigma = np.where(_wheel_speeds(x, tau, track_width_m) >= 0.0, 1.0, -1.0)
-    return sigma * np.asarray(torque, dtype=float) / k_s
+    v_w = wheel_speeds(x, tau, track_width_m)
+    s = np.empty(2)
+    for i in range(2):
+        s[i] = travel_sign(v_w[i]) * torque[i] / k_s[i]
+    return s
 
 
+@njit(cache=True)
 def odo_slip_hx(
     x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: float, counts_per_rad: float,
-    soil: OracleSoil | None = None,
+    soil: np.ndarray,
 ) -> np.ndarray:
     """Predicted odometer counts with the linear torque/slip model (Lindgren Eq. 37).
 
@@ -168,7 +207,7 @@ def odo_slip_hx(
 
     Parameters
     ----------
-    x : np.ndarray, shape (13,) or (9,) when ``soil`` is given
+    x : np.ndarray, shape (13,), or (9,) with ``soil``
         State at the end of the interval.
     tau : float
         Interval [s].
@@ -179,8 +218,9 @@ def odo_slip_hx(
         W [m].
     counts_per_rad : float
         1/Γ [counts/rad].
-    soil : OracleSoil or None
-        Fixed R_w and k_s (oracle filter); None takes them from ``x[9:13]``.
+    soil : np.ndarray, shape (4,)
+        The oracle's fixed ``[R_wl, R_wr, k_sl, k_sr]`` for a 9-state ``x``; ignored (pass
+        :data:`NO_SOIL`) for the 13-state one, whose R_w and k_s are states.
 
     Returns
     -------
@@ -188,14 +228,18 @@ def odo_slip_hx(
         Counts over the interval. Meaningful only while the slip is below 1.
     """
     r_w, k_s = slip_params(x, soil)
-    v_w = _wheel_speeds(x, tau, track_width_m)
-    sigma = np.where(v_w >= 0.0, 1.0, -1.0)
-    return tau * counts_per_rad * v_w * k_s / (r_w * (k_s - sigma * np.asarray(torque)))
+    v_w = wheel_speeds(x, tau, track_width_m)
+    z = np.empty(2)
+    for i in range(2):
+        sigma = travel_sign(v_w[i])
+        z[i] = tau * counts_per_rad * v_w[i] * k_s[i] / (r_w[i] * (k_s[i] - sigma * torque[i]))
+    return z
 
 
+@njit(cache=True)
 def odo_slip_H(
     x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: float, counts_per_rad: float,
-    soil: OracleSoil | None = None,
+    soil: np.ndarray,
 ) -> np.ndarray:
     """Jacobian of :func:`odo_slip_hx` (Lindgren Eq. 38-41), shape (2, n).
 
@@ -203,47 +247,51 @@ def odo_slip_H(
     (-τ/2 times Eq. 38-39); R_w and k_s (only when they are states) are Eq. 40-41.
     """
     r_w, k_s = slip_params(x, soil)
-    T = np.asarray(torque, dtype=float)
-    v_w = _wheel_speeds(x, tau, track_width_m)
-    sigma = np.where(v_w >= 0.0, 1.0, -1.0)
-    den = k_s - sigma * T
-    dz_dvw = tau * counts_per_rad * k_s / (r_w * den)  # Eq. 38
-    H = np.zeros((2, x.shape[0]))
-    H[:, IV] = dz_dvw
-    H[:, IOM] = dz_dvw * _SIDES * 0.5 * track_width_m  # Eq. 39
-    H[:, IVD] = -0.5 * tau * H[:, IV]
-    H[:, IOMD] = -0.5 * tau * H[:, IOM]
-    if soil is None:
-        z = dz_dvw * v_w
-        H[0, IRL], H[1, IRR] = -z / r_w  # Eq. 40
-        dz_dk = -tau * counts_per_rad * sigma * T * v_w / (r_w * den**2)  # Eq. 41
-        H[0, IKL], H[1, IKR] = dz_dk
+    v_w = wheel_speeds(x, tau, track_width_m)
+    n = x.shape[0]
+    H = np.zeros((2, n))
+    for i in range(2):
+        sigma = travel_sign(v_w[i])
+        den = k_s[i] - sigma * torque[i]
+        dz_dvw = tau * counts_per_rad * k_s[i] / (r_w[i] * den)  # Eq. 38
+        H[i, IV] = dz_dvw
+        H[i, IOM] = dz_dvw * SIDES[i] * 0.5 * track_width_m  # Eq. 39
+        H[i, IVD] = -0.5 * tau * H[i, IV]
+        H[i, IOMD] = -0.5 * tau * H[i, IOM]
+        if n == N_SLIP:
+            H[i, IRL + i] = -(dz_dvw * v_w[i]) / r_w[i]  # Eq. 40
+            H[i, IKL + i] = (-tau * counts_per_rad * sigma * torque[i] * v_w[i]
+                             / (r_w[i] * den**2))  # Eq. 41
     return H
 
 
 # ---------------------------------------------------------------------------------------------
 # Beacon bearing (Eq. 17)
 # ---------------------------------------------------------------------------------------------
+@njit(cache=True)
 def bearing_hx(x: np.ndarray, beacons_xy: np.ndarray) -> np.ndarray:
     """Predicted bearings to beacons, relative to body x (Lindgren Eq. 17).
 
     Parameters
     ----------
     x : np.ndarray, shape (n,)
-    beacons_xy : np.ndarray, shape (m, 2) or (2,)
+    beacons_xy : np.ndarray, shape (m, 2)
         Surveyed beacon positions [m].
 
     Returns
     -------
-    np.ndarray, shape (m,) (or () for one beacon)
+    np.ndarray, shape (m,)
         ``atan2(Y_b - y, X_b - x) - θ`` wrapped to (-π, π] [rad].
     """
-    b = np.asarray(beacons_xy, dtype=float)
-    return wrap_angles(np.arctan2(b[..., 1] - x[IY], b[..., 0] - x[IX]) - x[ITH])
+    h = np.empty(beacons_xy.shape[0])
+    for j in range(beacons_xy.shape[0]):
+        h[j] = wrap(math.atan2(beacons_xy[j, 1] - x[IY], beacons_xy[j, 0] - x[IX]) - x[ITH])
+    return h
 
 
+@njit(cache=True)
 def bearing_H(x: np.ndarray, beacon_xy: np.ndarray) -> np.ndarray:
-    """Jacobian of :func:`bearing_hx` for one beacon, shape (1, n)."""
+    """Jacobian of :func:`bearing_hx` for one beacon ``[X_b, Y_b]``, shape (1, n)."""
     dx, dy = beacon_xy[0] - x[IX], beacon_xy[1] - x[IY]
     r2 = dx * dx + dy * dy
     H = np.zeros((1, x.shape[0]))
@@ -251,11 +299,13 @@ def bearing_H(x: np.ndarray, beacon_xy: np.ndarray) -> np.ndarray:
     return H
 
 
-def bearing_residual(z: np.ndarray | float, h: np.ndarray | float) -> np.ndarray:
+@njit(cache=True)
+def bearing_residual(z: float, h: float) -> float:
     """Innovation of a bearing, ``wrap(z - h)`` [rad] (the ``residual`` of filterpy's EKF)."""
-    return wrap_angles(np.asarray(z, dtype=float) - np.asarray(h, dtype=float))
+    return wrap(z - h)
 
 
+@njit(cache=True)
 def nearest_beacon(x: np.ndarray, z: float, beacons_xy: np.ndarray) -> tuple[int, float]:
     """Associate a bearing with the beacon giving the smallest innovation (Lindgren §2.4).
 
@@ -274,6 +324,10 @@ def nearest_beacon(x: np.ndarray, z: float, beacons_xy: np.ndarray) -> tuple[int
     y : float
         Its innovation ``wrap(z - h_lz(x))`` [rad].
     """
-    y_all = bearing_residual(z, bearing_hx(x, beacons_xy))
-    j = int(np.argmin(np.abs(y_all)))
-    return j, float(y_all[j])
+    h = bearing_hx(x, beacons_xy)
+    best, y_best = 0, math.inf
+    for j in range(h.shape[0]):
+        y = bearing_residual(z, h[j])
+        if abs(y) < abs(y_best):
+            best, y_best = j, y
+    return best, y_best

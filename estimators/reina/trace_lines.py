@@ -129,7 +129,7 @@ def refine_angle(edges: np.ndarray, camera: PinholeCamera, ground_z_m: float,
     support the fit.
     """
     # (column, row) of every edge pixel in row-major order, as np.nonzero gives them;
-    # OpenCV's scan is about three times faster on a uint8 edge map (issue 15)
+    # OpenCV's scan is about three times faster on a uint8 edge map
     if edges.dtype == np.uint8 and edges.ndim == 2:
         found = cv2.findNonZero(edges)
         uv = np.zeros((0, 2)) if found is None else found.reshape(-1, 2).astype(float)

@@ -35,14 +35,14 @@ Regimes and regularisation (``speed_eps_mps`` = ε):
   ``R / (counts_per_rad · dt)``; the default 1 mm/s suits the Patako-like defaults.
 - Slip ratios are reported as ``α = s v / (v² + ε²)``, which equals s / v for |v| ≫ ε and stays
   finite for a stopped track (whose slip ratio is undefined).
+
+The functions take and return plain floats: :class:`EndoOdometry` calls them once per control
+step, where numpy's per-call overhead on scalars would cost several times the arithmetic.
 """
 
 from __future__ import annotations
 
 import math
-
-import numpy as np
-from numpy.typing import ArrayLike
 
 from slipenv.contracts import SensorFrame
 
@@ -71,46 +71,45 @@ def _check_eps(speed_eps_mps: float) -> float:
     return eps
 
 
-def endo_ratio(v_l: ArrayLike, v_r: ArrayLike, n: float) -> np.ndarray:
-    """Right-hand side of Endo's relation, ``α_l/α_r = -sgn(v_r v_l)|v_r/v_l|^n`` (Eq. 8) [-]."""
+def endo_ratio(v_l: float, v_r: float, n: float) -> float:
+    """Right-hand side of Endo's relation, ``α_l/α_r = -sgn(v_r v_l)|v_r/v_l|^n`` (Eq. 8) [-];
+    NaN for a stopped left track."""
     n = check_endo_n(n)
-    v_l, v_r = np.asarray(v_l, dtype=float), np.asarray(v_r, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return -np.sign(v_r * v_l) * np.abs(v_r / v_l) ** n
+    if v_l == 0.0:
+        return math.nan
+    return -math.copysign(1.0, v_r * v_l) * abs(v_r / v_l) ** n if v_r != 0.0 else -0.0
 
 
 def endo_left_share(
-    v_l: ArrayLike, v_r: ArrayLike, n: float, speed_eps_mps: float = DEFAULT_SPEED_EPS_MPS
-) -> np.ndarray:
+    v_l: float, v_r: float, n: float, speed_eps_mps: float = DEFAULT_SPEED_EPS_MPS
+) -> float:
     """Share f of the yaw-rate discrepancy taken by the left track's slip velocity [-].
 
     ``f = a_l / (a_l + a_r)`` with ``a = (v² + ε²)^((1-n)/2)``; written with the exponent's
     magnitude so that n > 1 gives no infinities. f = 1/2 when both regularised speeds are 0.
     """
     n, eps = check_endo_n(n), _check_eps(speed_eps_mps)
-    v_l, v_r = np.asarray(v_l, dtype=float), np.asarray(v_r, dtype=float)
     power = abs(1.0 - n)
-    a_l, a_r = np.hypot(v_l, eps) ** power, np.hypot(v_r, eps) ** power
+    a_l, a_r = math.hypot(v_l, eps) ** power, math.hypot(v_r, eps) ** power
     total = a_l + a_r
-    num = a_l if n <= 1.0 else a_r
-    return np.where(total > 0.0, num / np.where(total > 0.0, total, 1.0), 0.5)
+    return (a_l if n <= 1.0 else a_r) / total if total > 0.0 else 0.5
 
 
 def endo_slip_velocities(
-    v_l: ArrayLike,
-    v_r: ArrayLike,
-    yaw_rate: ArrayLike,
+    v_l: float,
+    v_r: float,
+    yaw_rate: float,
     tread_m: float,
     n: float,
     speed_eps_mps: float = DEFAULT_SPEED_EPS_MPS,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[float, float]:
     """Slip velocities ``s = α v`` of the tracks from Eq. 7-8 in closed form [m/s].
 
     Parameters
     ----------
-    v_l, v_r : array_like
+    v_l, v_r : float
         Input (encoder) track speeds [m/s].
-    yaw_rate : array_like
+    yaw_rate : float
         Measured yaw rate ω (gyro) [rad/s].
     tread_m : float
         Tread 2d [m].
@@ -121,34 +120,31 @@ def endo_slip_velocities(
 
     Returns
     -------
-    s_l, s_r : np.ndarray
+    s_l, s_r : float
         ``s_l = f c``, ``s_r = -(1 - f) c`` with ``c = 2d ω - (v_r - v_l)``.
     """
     share = endo_left_share(v_l, v_r, n, speed_eps_mps)
-    mismatch = check_tread(tread_m) * np.asarray(yaw_rate, dtype=float) - (
-        np.asarray(v_r, dtype=float) - np.asarray(v_l, dtype=float)
-    )
+    mismatch = check_tread(tread_m) * yaw_rate - (v_r - v_l)
     return share * mismatch, -(1.0 - share) * mismatch
 
 
 def slip_ratio_from_slip_velocity(
-    slip_velocity: ArrayLike, v: ArrayLike, speed_eps_mps: float = DEFAULT_SPEED_EPS_MPS
-) -> np.ndarray:
+    slip_velocity: float, v: float, speed_eps_mps: float = DEFAULT_SPEED_EPS_MPS
+) -> float:
     """Regularised slip ratio ``α = s v / (v² + ε²)`` [-]; NaN only if ε = 0 and v = 0."""
     eps = _check_eps(speed_eps_mps)
-    s, v = np.asarray(slip_velocity, dtype=float), np.asarray(v, dtype=float)
     den = v * v + eps * eps
-    return np.where(den > 0.0, s * v / np.where(den > 0.0, den, 1.0), np.nan)
+    return slip_velocity * v / den if den > 0.0 else math.nan
 
 
 def endo_slip_ratios(
-    v_l: ArrayLike,
-    v_r: ArrayLike,
-    yaw_rate: ArrayLike,
+    v_l: float,
+    v_r: float,
+    yaw_rate: float,
     tread_m: float,
     n: float,
     speed_eps_mps: float = DEFAULT_SPEED_EPS_MPS,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[float, float]:
     """Slip ratios α_l, α_r solving Eq. 7-8 for a measured yaw rate [-].
 
     Same arguments as :func:`endo_slip_velocities`; the ratios are divided out with
@@ -198,23 +194,14 @@ class EndoOdometry(Gyrodometry):
     def _translation(
         self, d_left: float, d_right: float, dyaw: float, dt: float, frame: SensorFrame
     ) -> tuple[float, float, dict]:
-        # endo_slip_velocities and slip_ratio_from_slip_velocity for one step, in plain floats
-        # term by term (bit-for-bit the same, tested): once per control step, their numpy
-        # calls on 0-d arrays cost ~25 µs, this ~3 µs.
         v_l, v_r = d_left / dt, d_right / dt
-        n, eps = self.n, self.speed_eps_mps
-        power = abs(1.0 - n)
-        a_l = float(np.hypot(v_l, eps)) ** power
-        a_r = float(np.hypot(v_r, eps)) ** power
-        total = a_l + a_r
-        share = ((a_l if n <= 1.0 else a_r) / total) if total > 0.0 else 0.5
-        mismatch = self.geometry.track_width_m * (dyaw / dt) - (v_r - v_l)
-        s_l, s_r = share * mismatch, -(1.0 - share) * mismatch
-        forward_m = 0.5 * (d_left + d_right) - 0.5 * (s_l + s_r) * dt
-        den_l, den_r = v_l * v_l + eps * eps, v_r * v_r + eps * eps
+        eps = self.speed_eps_mps
+        s_l, s_r = endo_slip_velocities(v_l, v_r, dyaw / dt, self.geometry.track_width_m,
+                                        self.n, eps)
+        forward_m = 0.5 * (d_left + d_right) - 0.5 * (s_l + s_r) * dt  # Eq. 1
         extras = {
-            "alpha_l": s_l * v_l / den_l if den_l > 0.0 else math.nan,
-            "alpha_r": s_r * v_r / den_r if den_r > 0.0 else math.nan,
+            "alpha_l": slip_ratio_from_slip_velocity(s_l, v_l, eps),
+            "alpha_r": slip_ratio_from_slip_velocity(s_r, v_r, eps),
             "slip_velocity_l_mps": s_l,
             "slip_velocity_r_mps": s_r,
         }

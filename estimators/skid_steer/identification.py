@@ -107,7 +107,7 @@ class SlipAngleModel:
         if type(roll) is float and type(angular_displacement) is float \
                 and type(rotation_radius) is float:
             # One sample per odometry step: the same IEEE operations on plain floats, without
-            # numpy's per-call cost on 0-d arrays (issue 15); bit-identical to the array path.
+            # numpy's per-call cost on 0-d arrays; bit-identical to the array path.
             regressors = [roll, angular_displacement, rotation_radius]
             if self.feature_range is not None:
                 regressors = [min(max(x, lo), hi)

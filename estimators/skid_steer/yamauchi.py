@@ -71,7 +71,7 @@ def rotation_radius_m(v_x: ArrayLike, yaw_rate: ArrayLike, max_radius_m: float) 
     if not (math.isfinite(r_max) and r_max > 0.0):
         raise ValueError(f"max_radius_m must be finite and > 0, got {max_radius_m!r}")
     if type(v_x) is float and type(yaw_rate) is float:
-        # one step's values: the same IEEE operations on plain floats (issue 15: numpy's
+        # one step's values: the same IEEE operations on plain floats (numpy's
         # per-call cost on 0-d arrays dominated the estimator); bit-identical to the array path
         speed, rate = abs(v_x), abs(yaw_rate)
         radius_f = speed / rate if rate > 0.0 else r_max

@@ -133,7 +133,7 @@ def markdown(cal: dict[str, Any]) -> list[str]:
     """Lines of the human report's calibration section."""
     ddc = cal["diff_drive_controller"]
     nom = cal["nominal"]
-    det = cal["determined"]
+    turn, dist = cal["determined"]["turn_scale"], cal["determined"]["distance_scale"]
     return [
         "## Odometry calibration", "",
         "Values for a differential-drive controller's config (ROS `diff_drive_controller`):",
@@ -152,7 +152,7 @@ def markdown(cal: dict[str, Any]) -> list[str]:
         *[f"| {k} | {estimate(cal[k][0], cal[k][1])} |" for k in
           ("wheel_radius_m", "wheel_separation_m", "left_wheel_radius_m", "right_wheel_radius_m",
            "right_left_radius_ratio")],
-        f"| turn scale c_θ | {estimate(*det['turn_scale'], spec='.5f')} |",
-        f"| distance scale c_d | {estimate(*det['distance_scale'], spec='.5f')} |", "",
+        f"| turn scale c_θ | {estimate(turn[0], turn[1], spec='.5f')} |",
+        f"| distance scale c_d | {estimate(dist[0], dist[1], spec='.5f')} |", "",
         f"What this log separates: {cal['note']}.", "",
     ]

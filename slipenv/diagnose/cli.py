@@ -10,10 +10,15 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from slipenv.logs.errors import LogFormatError
 from slipenv.logs.io import META_FILE, read_log
 from slipenv.logs.log import GT_COLUMNS, Log
+
+if TYPE_CHECKING:  # as in diagnose(): the fitting stack (scipy) loads only when a fit runs
+    from slipenv.diagnose.fit import Problem
+    from slipenv.diagnose.select import Selection
 
 
 def load_logs(path: str | Path, require_ground_truth: bool = True) -> list[Log]:
@@ -42,7 +47,7 @@ def _has_truth(folder: Path) -> bool:
 
 
 def diagnose(logs: list[Log], where: str, *, progress: bool = False, jobs: int = 1
-             ) -> tuple[dict, object]:
+             ) -> tuple[dict, tuple[Selection, Problem]]:
     """Run the diagnosis on ``logs``; (JSON report, context for the human report).
     ``jobs``: processes the fits run on (``workers.py``; the report does not depend on it)."""
     from concurrent.futures.process import BrokenProcessPool

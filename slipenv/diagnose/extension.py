@@ -229,7 +229,7 @@ def make_env(env_id: str, report: Any, render_mode: str | None = None, **overrid
     import gymnasium as gym
 
     config = SlipEnvConfig.from_kwargs(preset_config(env_id), **overrides)
-    extra = {"render_mode": render_mode} if render_mode is not None else {}
+    extra: dict[str, Any] = {"render_mode": render_mode} if render_mode is not None else {}
     return gym.make(env_id, config=apply_model(config, report), **extra)
 
 

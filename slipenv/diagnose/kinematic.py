@@ -264,6 +264,7 @@ def kinematic_log(seed: int, truth: KinematicTruth | None = None, *, duration_s:
         x, y = x - 0.5 * field_m, y - 0.5 * field_m
     slip = np.zeros(g.shape)
     if hidden_torque:
+        assert torque is not None  # drawn above whenever it hides a slip
         xm, ym = 0.5 * (x[1:] + x[:-1]), 0.5 * (y[1:] + y[:-1])
         c = np.full(n - 1, torque_slip_per_nm or 0.0)
         for region in soil_regions:

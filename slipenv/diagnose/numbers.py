@@ -1,5 +1,5 @@
 """How the diagnosis prints numbers: never ``inf`` or ``nan``, and an estimate whose standard
-error exceeds its magnitude as "not determined" (issue 11 item 7).
+error exceeds its magnitude as "not determined".
 
 An estimate ``v ± se`` with ``se > |v|`` does not tell the sign, let alone the value, at one
 standard error: printing ``74.552 ± 161.127 m`` invites a reader to use 74.552. The text
@@ -83,7 +83,7 @@ def implausible_geometry(parameters: dict[str, Any], nominal: dict[str, float]) 
         else:
             continue
         value = pair[0] if isinstance(pair, list | tuple) else pair
-        if not (is_number(value) and is_number(ref) and float(ref) > 0):
+        if ref is None or not (is_number(value) and is_number(ref) and float(ref) > 0):
             continue
         ratio = float(value) / float(ref)
         if not low <= ratio <= high:

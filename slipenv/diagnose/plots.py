@@ -11,9 +11,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from slipenv.diagnose import replay  # noqa: E402
-from slipenv.diagnose.fit import Problem  # noqa: E402
+from slipenv.diagnose.fit import Fit, Problem  # noqa: E402
 from slipenv.diagnose.numbers import num  # noqa: E402
 from slipenv.diagnose.select import Selection  # noqa: E402
+from slipenv.logs.log import Log  # noqa: E402
 
 _MAX_SEGMENTS = 40  # segments drawn in the overlay (the first ones of the first log)
 
@@ -137,9 +138,10 @@ def pybullet(path: Path, sim: dict) -> Path:
     return _save(fig, path)
 
 
-def dead_reckoning(path: Path, logs: list, fitted) -> Path:
+def dead_reckoning(path: Path, logs: list[Log], fitted: Fit) -> Path | None:
     """Each log (up to 6) dead-reckoned whole from its first logged pose: logged path, nominal
-    model, and the fitted model ``fitted`` (a ``fit.Fit``; in-sample: fitted on all logs)."""
+    model, and the fitted model ``fitted`` (in-sample: fitted on all logs). None (no figure)
+    when none of those logs holds enough ground truth to draw."""
     from slipenv.diagnose.segments import cut_spans, log_arrays
 
     shown = logs[:6]
@@ -149,6 +151,8 @@ def dead_reckoning(path: Path, logs: list, fitted) -> Path:
         ok = np.flatnonzero(arr["gt_ok"])
         spans.append((li, int(ok[0]), int(ok[-1]) + 1))
     seg = cut_spans(arrays, shown, spans)
+    if seg is None:
+        return None
     fig, axes = plt.subplots(1, 2, figsize=(13, 5.5))
     nominal, extended = replay.simulate(seg, {}), replay.simulate(seg, fitted.params)
     for j in range(len(seg)):

@@ -125,8 +125,9 @@ def analyse(logs: list[Log], where: str) -> dict:
 
 
 def _analyse_group(items: list[tuple[Log, dict]]) -> dict:
-    cat = {k: [] for k in ("kin", "gyro", "v_l", "v_r", "block", "current_left",
-                           "current_right", "run")}
+    cat: dict[str, list[np.ndarray]] = {
+        k: [] for k in ("kin", "gyro", "v_l", "v_r", "block", "current_left", "current_right",
+                        "run")}
     offset = 0
     for r, (_, sig) in enumerate(items):
         for k in cat:

@@ -42,6 +42,7 @@ data by the caller.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -178,7 +179,7 @@ class Layout:
         if isinstance(where, Quadratic):
             shape, mask = where.uv.shape[:-1], where.inside
         else:
-            shape, mask = where.shape[:-1], lambda rect, kind: inside(where, rect, kind)
+            shape, mask = where.shape[:-1], functools.partial(inside, where)
         out = np.zeros((self.count, *shape))
         for k, (rect, label, kind) in enumerate(zip(self.rects, self.labels, self.kinds,
                                                     strict=True)):

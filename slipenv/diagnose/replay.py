@@ -38,6 +38,7 @@ The gyro channel replays heading from the gyro alone, through the terms' ``gyro_
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -55,7 +56,10 @@ from slipenv.diagnose.segments import (
 )
 from slipenv.logs.log import Log
 
-Model = Mapping[str, object]
+if TYPE_CHECKING:  # for the type only: the effects package loads the envs
+    from slipenv.diagnose.effects.base import Term
+
+Model = Mapping[str, "Term"]
 """Effect id -> its parameter object (a ``Term``); ``{}`` is the nominal model."""
 
 __all__ = ["SUPPORTED_KINDS", "Model", "Segments", "build_segments", "check_logs",
@@ -85,6 +89,7 @@ def simulate(seg: Segments, model: Model) -> np.ndarray:
         radius = term.wheel_radius(seg, radius)
     d = radius[:, None, :] * seg.dphi
     g = d - slips(seg, model) * np.abs(d) if terms else d
+    track: np.ndarray | float
     if seg.steer is not None and seg.wheel_x is not None:
         track = seg.track
         for term in terms:
@@ -107,7 +112,7 @@ def simulate(seg: Segments, model: Model) -> np.ndarray:
     track = seg.track
     for term in terms:
         track = term.track_width(seg, track)
-    track = track[:, None] if np.ndim(track) else track
+    track = track[:, None] if isinstance(track, np.ndarray) and track.ndim else track
     ds = 0.5 * (left + right)
     dtheta = (right - left) / track
     theta = seg.anchor_heading()[:, None] + np.concatenate(
@@ -131,6 +136,8 @@ def rover_body_motion(seg: Segments, g: np.ndarray, track: np.ndarray | float
     (cos δ_i, sin δ_i) and 0 across. The 2 n equations in (du, dv, dθ) are solved by least
     squares per interval (exact when the wheels agree with one body motion).
     """
+    if seg.steer is None or seg.wheel_x is None:
+        raise ValueError("a 4WS replay needs the logged steering angles and wheel positions")
     w = np.asarray(track, dtype=float)
     w = w[:, None, None] if w.ndim else w
     y = (0.5 - seg.sides)[None, None, :] * w  # left (side 0) at +W/2

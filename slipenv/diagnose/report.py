@@ -68,10 +68,11 @@ def long_gain(sel: Selection) -> dict[str, Any] | None:
     """Position RMSE of each half of a single log replayed whole, by the nominal model and
     by the final model fitted on the other half (the long-horizon route's held-out gain)."""
     final = sel.final.get("pose")
-    if sel.halves is None or final is None or final.long_half is None:
+    nominal = sel.long_baseline["pose"][1] if "pose" in sel.long_baseline else None
+    if sel.halves is None or final is None or final.long_half is None or nominal is None:
         return None
     ok = sel.halves.seg[-1].gt_ok
-    base = sel.long_baseline["pose"][1].res[-1][..., :2][ok]
+    base = nominal.res[-1][..., :2][ok]
     after = final.long_half.res[-1][..., :2][ok]
     b = float(np.sqrt(np.mean(np.sum(base**2, axis=-1))))
     a = float(np.sqrt(np.mean(np.sum(after**2, axis=-1))))
@@ -284,8 +285,9 @@ def write_human_report(folder: str | Path, report: dict, sel: Selection, problem
             "regressors": plots.regressors(folder / "regressors.png", window_residuals(problem)),
             "candidates": plots.candidates(folder / "candidates.png", sel)}
     if logs and "pose" in sel.fits and sel.fits["pose"].effects:
-        figs["dead_reckoning"] = plots.dead_reckoning(folder / "dead_reckoning.png", logs,
-                                                      sel.fits["pose"])
+        whole = plots.dead_reckoning(folder / "dead_reckoning.png", logs, sel.fits["pose"])
+        if whole is not None:
+            figs["dead_reckoning"] = whole
     fitted = sel.fits.get("pose")
     if fitted is not None and any(effect(name).local for name in fitted.effects):
         figs["soil"] = plots.soil(folder / "soil.png", problem, fitted)

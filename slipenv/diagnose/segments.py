@@ -202,6 +202,7 @@ def _assemble(pieces: list[tuple], logs: list[Log]) -> Segments:
                            ("gyro", gyro), ("steer", steer)):
             if dest is not None:
                 dest[j, :n - 1] = arr[name][a:b - 1]
+    wheelbase = logs[0].meta.wheelbase_m
     return Segments(
         t=t, dt=np.diff(t, axis=1), dphi=dphi, torque=torque, roll=roll, pitch=pitch,
         gyro=gyro, beta=beta,
@@ -212,8 +213,9 @@ def _assemble(pieces: list[tuple], logs: list[Log]) -> Segments:
         log_index=np.array([p[0] for p in pieces]), start=np.array([p[1] for p in pieces]),
         sides=wheel_sides(wheels), wheels=list(wheels), kind=logs[0].meta.kind,
         steer=steer,
-        wheel_x=(wheel_x(list(wheels), float(logs[0].meta.wheelbase_m))
-                 if logs[0].meta.kind == "rover4ws" else None),
+        # meta validation gives every rover4ws log a wheelbase
+        wheel_x=(wheel_x(list(wheels), wheelbase)
+                 if logs[0].meta.kind == "rover4ws" and wheelbase is not None else None),
     )
 
 

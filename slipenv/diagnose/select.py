@@ -60,20 +60,32 @@ TIE_RATIO = 1.25  # a simpler effect within this error ratio of the best and not
 N_FOLDS = 6
 MIN_SEGMENTS = 4
 
+Routes = tuple[horizon.Horizons, horizon.Horizons | None]
+"""The long route's held-out blocks, and the two halves of a single log (or None)."""
+LongReference = tuple[horizon.Replays, horizon.Replays | None]
+"""A reference model's replays of the blocks and of the halves (None without halves)."""
+LongFits = tuple[list, list | None]
+"""Submitted fold fits of the blocks and of the halves."""
+
+
+def _no_segments() -> np.ndarray:
+    return np.zeros(0)
+
 
 @dataclass
 class Candidate:
     """One effect (or set of effects) compared on held-out segments.
 
     ``errors`` are held-out mean squared residuals per segment; ``pred`` the held-out
-    predictions (pose: x, y, yaw of shape (S, L, 3); gyro: yaw of shape (S, L)).
+    predictions (pose: x, y, yaw of shape (S, L, 3); gyro: yaw of shape (S, L)); both empty
+    for an untestable candidate.
     """
 
     effects: tuple[str, ...]
     channel: str
     n_params: int = 0
-    errors: np.ndarray | None = None
-    pred: np.ndarray | None = None
+    errors: np.ndarray = field(default_factory=_no_segments)
+    pred: np.ndarray = field(default_factory=_no_segments)
     gain_relative: float = 0.0
     error_ratio: float = 1.0
     p_value: float = 1.0
@@ -105,7 +117,7 @@ class Selection:
     folds: np.ndarray
     horizons: horizon.Horizons | None = None
     halves: horizon.Horizons | None = None
-    long_baseline: dict[str, tuple] = field(default_factory=dict)
+    long_baseline: dict[str, LongReference] = field(default_factory=dict)
 
 
 def make_folds(seg: Segments) -> np.ndarray:
@@ -205,23 +217,35 @@ def _judge(problem: Problem, cand: Candidate, reference: np.ndarray,
     cand.significant = cand.short_significant or cand.long_significant
 
 
-def _submit_long(workers: Workers, problem: Problem, hz: tuple | None,
-                 effects: tuple[str, ...], warm: tuple[Candidate, ...] = ()) -> tuple | None:
+def _submit_long(workers: Workers, problem: Problem, hz: Routes, effects: tuple[str, ...],
+                 warm: tuple[Candidate, ...] = ()) -> LongFits:
     """The fold fits :func:`_judge_long` needs for ``effects`` (blocks, halves), submitted."""
-    if hz is None:
-        return None
     blocks, halves = hz
     return (horizon.submit(workers, problem, blocks, effects,
-                           _merged([c.long.replays.models for c in warm])),
+                           _merged([_long(c).replays.models for c in warm])),
             None if halves is None else
             horizon.submit(workers, problem, halves, effects,
-                           _merged([c.long_half.models for c in warm])))
+                           _merged([_long_half(c).models for c in warm])))
 
 
-def _judge_long(problem: Problem, hz: tuple | None, cand: Candidate,
-                reference: tuple[horizon.Replays, horizon.Replays | None] | None,
+def _long(cand: Candidate) -> horizon.LongScore:
+    """The long-route score of a candidate judged there."""
+    if cand.long is None:
+        raise ValueError(f"{cand.name} was not judged on the long route")
+    return cand.long
+
+
+def _long_half(cand: Candidate) -> horizon.Replays:
+    """The replays of the halves of a candidate judged on them."""
+    if cand.long_half is None:
+        raise ValueError(f"{cand.name} was not replayed on the halves of the log")
+    return cand.long_half
+
+
+def _judge_long(problem: Problem, hz: Routes | None, cand: Candidate,
+                reference: LongReference | None,
                 increment: bool = False, warm: tuple[Candidate, ...] = (),
-                pending: tuple | None = None, workers: Workers = INLINE) -> None:
+                pending: LongFits | None = None, workers: Workers = INLINE) -> None:
     """The long-horizon route (``horizon.py``): the same three tests on the held-out blocks
     replayed at horizons up to the whole block (``hz``: the blocks, and the two halves of a
     single log for the gain and drift; ``reference``: their replays by the reference).
@@ -242,7 +266,11 @@ def _judge_long(problem: Problem, hz: tuple | None, cand: Candidate,
                                            fits=half_fits))
     else:
         replays = cand.long.replays
-    half = None if halves is None else (cand.long_half, reference[1], halves)
+    half = None
+    if halves is not None:
+        if reference[1] is None:
+            raise ValueError("the reference was not replayed on the halves of the log")
+        half = (_long_half(cand), reference[1], halves)
     cand.long = horizon.judge(problem, blocks, replays, reference[0], cand.channel, half)
     material = MIN_GYRO_DRIFT_RAD_S if cand.channel == "gyro" else MIN_DRIFT
     drift = max(cand.long.drift, cand.long.turn_drift)
@@ -259,9 +287,9 @@ def _merged(per_source: list[list[dict]]) -> list[dict] | None:
             for fold in zip(*per_source, strict=True)]
 
 
-def _long_ratio(cand: Candidate, base: tuple) -> float:
+def _long_ratio(cand: Candidate, base: LongReference) -> float:
     """Horizon-averaged held-out error over the nominal model's (long route, blocks)."""
-    return float(np.mean(cand.long.errors.sum(axis=0)
+    return float(np.mean(_long(cand).errors.sum(axis=0)
                          / np.maximum(base[0].errors.sum(axis=0), 1e-300)))
 
 
@@ -288,28 +316,28 @@ def _pick(significant: list[Candidate]) -> Candidate:
     return best
 
 
-def _pick_long(significant: list[Candidate], base: tuple) -> Candidate:
+def _pick_long(significant: list[Candidate], base: LongReference) -> Candidate:
     """As :func:`_pick`, on the long-horizon scores (fold-level t-test for "not worse")."""
     best = min(significant, key=lambda c: _long_ratio(c, base))
     order = list(EFFECTS)
     for cand in sorted(significant, key=lambda c: (c.n_params, order.index(c.effects[0]))):
         if cand is best:
             return best
-        worse = horizon.judge_pair(cand.long.errors, best.long.errors)
+        worse = horizon.judge_pair(_long(cand).errors, _long(best).errors)
         if worse >= ALPHA and _long_ratio(cand, base) <= TIE_RATIO * _long_ratio(best, base):
             return cand
     return best
 
 
-def _choose(sig: list[Candidate], long_base: tuple | None) -> Candidate:
+def _choose(sig: list[Candidate], long_base: LongReference | None) -> Candidate:
     """The short-segment pick when some effect passes there, else the long-horizon pick."""
     short = [c for c in sig if c.short_significant]
     return _pick(short) if short or long_base is None else _pick_long(sig, long_base)
 
 
-def _step(problem: Problem, hz: tuple | None, folds: np.ndarray, candidates: list[Candidate],
-          current: Candidate, rest: list[str], long_base: tuple | None, workers: Workers
-          ) -> Candidate | None:
+def _step(problem: Problem, hz: Routes | None, folds: np.ndarray,
+          candidates: list[Candidate], current: Candidate, rest: list[str],
+          long_base: LongReference | None, workers: Workers) -> Candidate | None:
     """One forward-selection step: ``current`` joined by each of ``rest`` in turn; the pick
     among the joints that pass against ``current`` (None if none does)."""
     alone = {name: next(c for c in candidates if c.effects == (name,)) for name in rest}
@@ -329,12 +357,12 @@ def _step(problem: Problem, hz: tuple | None, folds: np.ndarray, candidates: lis
     warm = {name: (current, alone[name]) if alone[name].long is not None else ()
             for name in rest}
     longs = {name: _submit_long(workers, problem, hz, joints[name].effects, warm[name])
-             for name in rest if current.long is not None
+             for name in rest if hz is not None and current.long is not None
              and not joints[name].short_significant and not effect(name).local}
     trials = []
     for name in rest:
         if name in longs:
-            _judge_long(problem, hz, joints[name], (current.long.replays, current.long_half),
+            _judge_long(problem, hz, joints[name], (_long(current).replays, current.long_half),
                         increment=effect(name).calibration, warm=warm[name],
                         pending=longs[name])
         if joints[name].significant:
@@ -361,7 +389,7 @@ def _select(problem: Problem, progress: bool, logs: list | None, workers: Worker
     folds = make_folds(seg)
     channels = ["pose"] + (["gyro"] if seg.gyro is not None else [])
     baseline = {ch: cross_validate(problem, (), folds, ch) for ch in channels}
-    hz = None
+    hz: Routes | None = None
     if logs:
         arrays = [log_arrays(log) for log in logs]
         blocks = horizon.build(problem, arrays, logs, N_FOLDS)
@@ -376,7 +404,7 @@ def _select(problem: Problem, progress: bool, logs: list | None, workers: Worker
     # every fit of every testable effect submitted at once, collected in order below
     pending = {name: (submit_folds(workers, problem, (name,), folds),
                       _submit_long(workers, problem, hz, (name,))
-                      if long_base.get(effect(name).channel) is not None else None)
+                      if hz is not None and effect(name).channel in long_base else None)
                for name in names if why[name] is None}
     candidates: list[Candidate] = []
     for name in tqdm(names, desc="fitting effects", unit="effect", disable=not progress):

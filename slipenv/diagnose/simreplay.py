@@ -59,6 +59,7 @@ def generic_vehicle(log: Log) -> VehicleSpec:
     r, w = meta.wheel_radius_m, meta.track_width_m
     mass = meta.mass_kg or float(np.clip(40.0 * (w / 0.55) ** 2, 2.0, 3000.0))
     chassis = 0.8 * mass
+    wheels: tuple[WheelSpec, ...]
     if meta.kind == "diff_drive":
         wheels = (WheelSpec("left", (0.0, w / 2, 0.0), r, 0.3 * r, 0.05 * mass, "left"),
                   WheelSpec("right", (0.0, -w / 2, 0.0), r, 0.3 * r, 0.05 * mass, "right"),
@@ -101,14 +102,12 @@ def _yaw_ratio(cfg: SlipEnvConfig, hz: float) -> float:
         v = 0.2 * w * 4  # about four track widths per second... scaled to the vehicle
         omega = 0.4 * v / w
         sim.reset(0.0, 0.0, 0.0)
-        truth = None
-        for _ in range(int(2 * hz)):
-            truth = sim.step([(v - omega * w / 2) / r, (v + omega * w / 2) / r], [0.0] * 4)
-        yaw0, t0 = truth.yaw_rad, truth.t_s
-        for _ in range(int(2 * hz)):
-            truth = sim.step([(v - omega * w / 2) / r, (v + omega * w / 2) / r], [0.0] * 4)
-        turned = (truth.yaw_rad - yaw0 + math.pi) % (2 * math.pi) - math.pi
-        return turned / (truth.t_s - t0) / omega
+        steps = max(int(2 * hz), 1)  # 2 s to settle into the arc, then 2 s measured
+        truths = [sim.step([(v - omega * w / 2) / r, (v + omega * w / 2) / r], [0.0] * 4)
+                  for _ in range(2 * steps)]
+        start, end = truths[steps - 1], truths[-1]
+        turned = (end.yaw_rad - start.yaw_rad + math.pi) % (2 * math.pi) - math.pi
+        return turned / (end.t_s - start.t_s) / omega
     finally:
         sim.close()
 
@@ -132,6 +131,7 @@ def calibrated_world(log: Log, hz: float) -> SlipEnvConfig:
 def _simulator(cfg: SlipEnvConfig, hz: float) -> Simulator:
     spec = make_vehicle(cfg.vehicle)
     physics = hz * max(1, round(240.0 / hz))
+    assert isinstance(cfg.terrain, TerrainSpec)  # SlipEnvConfig keeps a spec
     return Simulator(spec, cfg.terrain, make_force_model(cfg.force_model, spec),
                      make_soil_map(cfg.soil, cfg.soil_map), physics_hz=physics, control_hz=hz)
 
@@ -215,9 +215,9 @@ def pybullet_overlay(log: Log, sel: Selection, problem, seed: int = 0,
             if sim is not None:
                 sim.close()
     for name in ("nominal", "extended"):
-        err = [np.hypot(*(s[:, :2] - g[:, :2]).T) for s, g in zip(out[name], out["logged"],
-                                                                   strict=True)]
-        err = np.concatenate(err) if err else np.zeros(1)
+        per_segment = [np.hypot(*(s[:, :2] - g[:, :2]).T)
+                       for s, g in zip(out[name], out["logged"], strict=True)]
+        err = np.concatenate(per_segment) if per_segment else np.zeros(1)
         err = err[np.isfinite(err)]  # a blow-up, or a fold the world could not take
         out[f"rmse_{name}_m"] = float(np.sqrt(np.mean(err**2))) if err.size else float("nan")
     out["note"] = ("Generic vehicle with the log's nominal geometry on rigid ground (mass and "

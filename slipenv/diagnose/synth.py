@@ -98,20 +98,22 @@ VEHICLES = {"diff_drive": farm_2wd, "skid_steer": skid4, "tracked": tracked_pata
 PHYSICAL_KIND = {label: make().kind for label, make in VEHICLES.items()}
 """The vehicle kind (``VehicleSpec.kind``) of each label: what an effect's ``Hiding.kinds``,
 the force law of rigid ground and the diagnosis go by."""
-GENERATED = ("none", *(name for name, e in EFFECTS.items() if e.hiding is not None))
-DRAWN = ("none", *(name for name in GENERATED[1:] if EFFECTS[name].hiding.drawn))
+HIDINGS = {name: e.hiding for name, e in EFFECTS.items() if e.hiding is not None}
+"""How each effect the generator can hide is hidden."""
+GENERATED = ("none", *HIDINGS)
+DRAWN = ("none", *(name for name, hiding in HIDINGS.items() if hiding.drawn))
 """The effects :func:`generate` picks from at random (the others only when named)."""
 KINDS = {"none": tuple(VEHICLES)} | {
-    name: tuple(label for label in VEHICLES if PHYSICAL_KIND[label] in EFFECTS[name].hiding.kinds)
-    for name in GENERATED[1:]}
+    name: tuple(label for label in VEHICLES if PHYSICAL_KIND[label] in hiding.kinds)
+    for name, hiding in HIDINGS.items()}
 """Vehicle labels each effect is hidden on (those whose kind is in its ``Hiding.kinds``)."""
 ARENA_M = {"diff_drive": 5.0, "skid_steer": 3.5,  # half-size of the waypoint box [m]
            "tracked": 2.0, "rover4ws": 2.0}  # (the 0.3 m/s vehicles: a smaller box)
 MAX_TURN_RATIO = {"diff_drive": 0.8, "skid_steer": 0.35,  # |v_r - v_l| / |v_r + v_l| limit
                   "tracked": 0.35, "rover4ws": 0.8}
 CALIBRATION_S = 150.0  # [s] length of the noise-free calibration runs
-EXACT = {kind: tuple(name for name in GENERATED[1:] if EFFECTS[name].hiding.exact
-                    and kind in KINDS[name]) for kind in VEHICLES}
+EXACT = {kind: tuple(name for name, hiding in HIDINGS.items()
+                     if hiding.exact and kind in KINDS[name]) for kind in VEHICLES}
 """Effects whose true parameters the physics takes one to one (a sensor offset). For all
 others the vehicle's own dynamics shift the effective value a little (the farm vehicle's
 castors let it oversteer, tread compliance adds slip), so their true values are those fitted
@@ -166,9 +168,10 @@ def hidden_world(kind: str, name: str, rng: np.random.Generator,
     logs unless the effect forbids it.
     """
     hiding = effect(name).hiding if name != "none" else None
+    slope_range = None if hiding is None else hiding.slope_range(PHYSICAL_KIND[kind])
     slope = 0.0
-    if hiding is not None and hiding.sloped(PHYSICAL_KIND[kind]):
-        slope = float(rng.uniform(*hiding.slope_deg))
+    if slope_range is not None:
+        slope = float(rng.uniform(*slope_range))
     elif (PHYSICAL_KIND[kind] == "diff_drive" and (hiding is None or hiding.random_slope)
           and rng.random() < 0.3):
         slope = float(rng.uniform(5.0, 12.0))
@@ -185,6 +188,8 @@ def hidden_world(kind: str, name: str, rng: np.random.Generator,
         world.update(hidden.slip_options)
         return dataclasses.replace(cfg, force_model=scaled(cfg.force_model,
                                                            **hidden.slip_options)), {}, world
+    if hidden.params is None:
+        raise ValueError(f"{name}: Hiding.draw gave neither parameters nor slip options")
     wheels = list(spec.channels)
     params = effect(name).to_contract(hidden.params, dict.fromkeys(effect(name).fields(), 0.0),
                                       wheels, wheel_sides(wheels))
@@ -221,19 +226,23 @@ def drive(cfg: SlipEnvConfig, kind: str, rng: np.random.Generator, duration_s: f
     again); speeds change every 3-8 s between 30 and 90 % of the vehicle's top speed.
     """
     spec = make_vehicle(cfg.vehicle)
-    noise = SensorNoise.perfect() if exact else cfg.sensor_noise
+    terrain, world_noise = cfg.terrain, cfg.sensor_noise
+    # SlipEnvConfig keeps both as specs, whatever form they were given in
+    assert isinstance(terrain, TerrainSpec) and isinstance(world_noise, SensorNoise)
+    noise = world_noise
     if exact:
-        noise = dataclasses.replace(noise, gyro_bias_rad_s=cfg.sensor_noise.gyro_bias_rad_s)
-    sim = Simulator(spec, cfg.terrain, make_force_model(cfg.force_model, spec),
+        noise = dataclasses.replace(SensorNoise.perfect(),
+                                    gyro_bias_rad_s=world_noise.gyro_bias_rad_s)
+    sim = Simulator(spec, terrain, make_force_model(cfg.force_model, spec),
                     make_soil_map(cfg.soil, cfg.soil_map), control_hz=cfg.control_hz)
     sensors = SensorSuite(spec.counts_per_rad, noise)
     nominal = VEHICLES[kind]()
-    meta = meta_for(nominal, cfg.terrain, "rigid", notes="slipenv.diagnose.synth")
+    meta = meta_for(nominal, terrain, "rigid", notes="slipenv.diagnose.synth")
     if meta_track_m is not None:
         meta.data["vehicle"]["track_width_m"] = meta_track_m
     rec = LogRecorder(meta, columns)
     steered = any(w.steered for w in nominal.wheels)  # the log holds the steering angles
-    sloped = cfg.terrain.kind == "slope"
+    sloped = terrain.kind == "slope"
     arena = arena_m(kind, sloped)
     turn_ratio = MAX_TURN_RATIO[kind] * (0.4 if sloped else 1.0)
     try:
@@ -357,7 +366,7 @@ def generate(seed: int, effect: str | None = None, kind: str | None = None,
     world.update({k: v for values in model.values() for k, v in values.items()})
     if effect in EXACT[kind]:
         truth = dict(model[effect])
-    elif effect != "none" and hiding.compare:
+    elif hiding is not None and hiding.compare:  # hiding is None for "none" only
         truth = {k: v[0] for k, v in calibrate(cfg, kind, (effect,), meta_w, focus).items()}
     else:
         truth = {}

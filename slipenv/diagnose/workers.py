@@ -70,6 +70,7 @@ class _Later:
                 self._error = exc
         if self._error is not None:
             raise self._error
+        assert self._value is not None  # fit() returned it, or raised above
         return self._value
 
 

@@ -11,13 +11,30 @@ import difflib
 import inspect
 import math
 import numbers
+from collections.abc import Sequence
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
+import numpy as np
+
+from slipenv.envs.factory import ForceModelFactory, make_path
+from slipenv.paths import PATHS, Path
+from slipenv.sensors.beacons import BeaconScanner, as_beacons_xy
 from slipenv.sensors.noise import SensorNoise
 from slipenv.terrain.terrain import TerrainSpec
+from slipenv.terramechanics.contact import ContactGeometry
+from slipenv.terramechanics.models import FORCE_MODELS, ForceModel
+from slipenv.terramechanics.presets import SOILS
+from slipenv.terramechanics.soil import Soil
+from slipenv.terramechanics.soil_map import SoilMap
+from slipenv.vehicles.presets import VEHICLES
+from slipenv.vehicles.spec import VehicleSpec
 
 REWARD_TERMS = ("cross_track", "heading", "progress", "effort")
+
+Beacons = bool | str | BeaconScanner | Sequence[Sequence[float]] | np.ndarray | None
+"""What ``beacons`` accepts; stored as ``None``, ``False``, ``True``, a scanner, or a tuple of
+(x, y) pairs."""
 
 
 @dataclass(frozen=True)
@@ -28,17 +45,17 @@ class SlipEnvConfig:
     ----------
     vehicle : str | VehicleSpec
         Vehicle preset name (``farm_2wd``, ``tracked_patako``, ``rover_4ws``, ``husky``) or spec.
-    terrain : TerrainSpec | dict | str
+    terrain : TerrainSpec | dict[str, Any] | str
         Ground geometry: a spec, its fields as a dict, or a kind name (``flat``/``slope``/
         ``mounds``).
     soil : str | Soil
         Soil preset name or a :class:`slipenv.terramechanics.soil.Soil`.
     soil_map : SoilMap | None
-        A spatially varying soil (overrides ``soil``).
-    force_model : str | ForceModel | callable
+        A spatially varying soil (any object with ``params_at(x, y)``; overrides ``soil``).
+    force_model : str | ForceModel | ForceModelFactory
         ``"reina"``, ``"janosi"``, ``"linear"``, a model instance, or a callable taking the
         wheel's ``ContactGeometry`` and returning a model.
-    force_model_kwargs : dict
+    force_model_kwargs : dict[str, Any]
         Options of the force model named by ``force_model`` (its constructor's keyword
         arguments), e.g. ``{"lateral_stiffness_ratio": 3.6}`` for ``janosi`` or ``linear``:
         the soil's lateral small-slip stiffness over its longitudinal one (Reina measured
@@ -58,24 +75,25 @@ class SlipEnvConfig:
         0.12 m, ~1200 N each) on field loam they would meet ~300 N each, twice the default.
     path : str | Path
         Path name (``slipenv.paths.path_by_name``) or a built ``Path``.
-    path_kwargs : dict
+    path_kwargs : dict[str, Any]
         Arguments of the named path (radius, speed, ...).
     estimator : str
         Odometry estimator producing the observation (``slipenv.envs.estimation``).
-    estimator_kwargs : dict
+    estimator_kwargs : dict[str, Any]
         Arguments of the estimator.
-    sensor_noise : SensorNoise | dict
-        Sensor noise levels (DESIGN §4 defaults).
-    beacons : bool | array | BeaconScanner | None
-        Laser beacon scanner (Lindgren §2.2): ``True`` for the default 15-beacon field, an
-        (n, 2) array of surveyed beacon positions [m], or a scanner; ``None`` for none.
+    sensor_noise : SensorNoise | dict[str, float]
+        Sensor noise levels (DESIGN §4 defaults); stored as a ``SensorNoise``.
+    beacons : Beacons
+        Laser beacon scanner (Lindgren §2.2): ``True`` (or ``"default"``) for the default
+        15-beacon field, an (n, 2) array of surveyed beacon positions [m], or a scanner;
+        ``None`` or ``False`` for none.
     control_hz, physics_hz : float
         Env step and physics substep rates [Hz].
     max_episode_s : float
         Episode time limit [s] (truncation).
     max_cross_track_m : float
         True cross-track error that ends the episode as failed [m].
-    reward_weights : dict
+    reward_weights : dict[str, float]
         Weights of the named reward terms ``cross_track``, ``heading``, ``progress``,
         ``effort``; each term's value is reported in ``info["reward_terms"]``.
     start_jitter : tuple[float, float]
@@ -98,42 +116,44 @@ class SlipEnvConfig:
     while the cost grows with the rate: 0.09 s of wall time per simulated second at 2000 Hz,
     about 5 s at 1e5 Hz) and an integer multiple of ``control_hz``.
     ``path_kwargs`` must be parameters of the named path builder; ``estimator_kwargs`` are
-    checked by building the estimator when the env is made.
+    checked by building the estimator when the env is made. This is the one place the options
+    are checked: the builders (:mod:`slipenv.envs.factory`) and the
+    :class:`~slipenv.sim.simulator.Simulator` take the checked values as they are.
     """
 
-    vehicle: Any = "husky"
-    terrain: Any = "flat"
-    soil: Any = "loose_sand"
-    soil_map: Any = None
-    force_model: Any = "reina"
-    force_model_kwargs: dict = field(default_factory=dict)
+    vehicle: str | VehicleSpec = "husky"
+    terrain: TerrainSpec | dict[str, Any] | str = "flat"
+    soil: str | Soil = "loose_sand"
+    soil_map: SoilMap | None = None
+    force_model: str | ForceModel | ForceModelFactory = "reina"
+    force_model_kwargs: dict[str, Any] = field(default_factory=dict)
     multi_pass: bool = False
     castor_own_geometry: bool = False
-    path: Any = "circle"
-    path_kwargs: dict = field(default_factory=dict)
+    path: str | Path = "circle"
+    path_kwargs: dict[str, Any] = field(default_factory=dict)
     estimator: str = "dead_reckoning"
-    estimator_kwargs: dict = field(default_factory=dict)
-    sensor_noise: Any = field(default_factory=SensorNoise)
-    beacons: Any = None
+    estimator_kwargs: dict[str, Any] = field(default_factory=dict)
+    sensor_noise: SensorNoise | dict[str, float] = field(default_factory=SensorNoise)
+    beacons: Beacons = None
     control_hz: float = 20.0
     physics_hz: float = 240.0
     max_episode_s: float = 120.0
     max_cross_track_m: float = 2.0
-    reward_weights: dict = field(
+    reward_weights: dict[str, float] = field(
         default_factory=lambda: {"cross_track": 1.0, "heading": 0.2, "progress": 1.0,
                                  "effort": 0.05}
     )
-    start_jitter: tuple = (0.02, 1.0)
+    start_jitter: tuple[float, float] = (0.02, 1.0)
     camera_in_info: bool = False
 
     def __post_init__(self) -> None:
-        _check_choice("vehicle", self.vehicle, _vehicle_names(), _vehicle_type())
+        _check_choice("vehicle", self.vehicle, VEHICLES, VehicleSpec)
         object.__setattr__(self, "terrain", _terrain(self.terrain))
-        _check_choice("soil", self.soil, _soil_names(), _soil_type())
-        if self.soil_map is not None and not hasattr(self.soil_map, "params_at"):
+        _check_choice("soil", self.soil, SOILS, Soil)
+        if self.soil_map is not None and not isinstance(self.soil_map, SoilMap):
             raise ValueError(f"soil_map must provide params_at(x, y), got {self.soil_map!r}")
         if isinstance(self.force_model, str):
-            _check_choice("force_model", self.force_model, _force_model_names(), None)
+            _check_choice("force_model", self.force_model, FORCE_MODELS, None)
         elif not (hasattr(self.force_model, "resistance_n") or callable(self.force_model)):
             raise ValueError("force_model must be a name, a ForceModel or a factory, got "
                              f"{self.force_model!r}")
@@ -148,7 +168,7 @@ class SlipEnvConfig:
         if not isinstance(self.castor_own_geometry, bool):
             raise ValueError("castor_own_geometry must be True or False, got "
                              f"{self.castor_own_geometry!r}")
-        _check_choice("path", self.path, _path_names(), _path_type())
+        _check_choice("path", self.path, PATHS, Path)
         _check_options("path_kwargs", self.path_kwargs)
         if isinstance(self.path, str):
             _check_names(f"path_kwargs of path {self.path!r}", self.path_kwargs,
@@ -172,7 +192,7 @@ class SlipEnvConfig:
             raise ValueError(f"physics_hz ({self.physics_hz:g}) must be an integer multiple of "
                              f"control_hz ({self.control_hz:g}), got a ratio of {ratio:g}")
         jitter = self.start_jitter
-        if (not isinstance(jitter, (tuple, list)) or len(jitter) != 2
+        if (not isinstance(jitter, tuple | list) or len(jitter) != 2
                 or not all(_is_number(v) and math.isfinite(v) for v in jitter)
                 or not (0.0 <= jitter[0] <= 1.0 and 0.0 <= jitter[1] <= 30.0)):
             raise ValueError("start_jitter must be (position_m, yaw_deg) with 0 <= position_m "
@@ -274,6 +294,10 @@ def _named(owner: str, cls, **values):
         raise ValueError(f"{owner}: {exc}") from None
 
 
+# A wheel's contact geometry for checking a force model's options (any valid one).
+_NOMINAL_GEOMETRY = ContactGeometry(radius_m=0.1, width_m=0.1, contact_length_m=0.05)
+
+
 def _check_force_model_kwargs(force_model: Any, kwargs: Any) -> None:
     """``kwargs`` must be options of the named force model's class, numbers where its default
     is a number, flags where it is a flag, and build the model (its range checks)."""
@@ -284,7 +308,7 @@ def _check_force_model_kwargs(force_model: Any, kwargs: Any) -> None:
         raise ValueError("force_model_kwargs apply to a force model given by name; with a "
                          f"model instance or factory pass its options to it (got "
                          f"force_model={force_model!r}, force_model_kwargs={kwargs!r})")
-    cls = _force_model_names()[force_model]
+    cls = FORCE_MODELS[force_model]
     params = {k: v for k, v in inspect.signature(cls).parameters.items() if k != "geometry"}
     try:
         _check_names(f"force_model_kwargs of force model {force_model!r}", kwargs, params)
@@ -304,27 +328,19 @@ def _check_force_model_kwargs(force_model: Any, kwargs: Any) -> None:
             raise ValueError(f"force_model_kwargs[{key!r}] must be a finite number, "
                              f"got {value!r}")
     try:
-        cls(_nominal_geometry(), **kwargs)
+        cls(_NOMINAL_GEOMETRY, **kwargs)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"force_model_kwargs: {exc}") from None
 
 
-def _nominal_geometry():
-    """A wheel's contact geometry for checking a force model's options (any valid one)."""
-    from slipenv.terramechanics.contact import ContactGeometry
-
-    return ContactGeometry(radius_m=0.1, width_m=0.1, contact_length_m=0.05)
+def _name(vehicle: str | VehicleSpec) -> str:
+    return vehicle if isinstance(vehicle, str) else vehicle.name
 
 
-def _name(value: Any) -> str:
-    return value if isinstance(value, str) else getattr(value, "name", repr(value))
-
-
-def _track_model(vehicle: Any) -> str | None:
+def _track_model(vehicle: str | VehicleSpec) -> str | None:
     """The vehicle's track model (``None``: the per-wheel law)."""
-    spec = _vehicle_names()[vehicle]() if isinstance(vehicle, str) else vehicle
-    model = getattr(spec, "track_model", "per_wheel")
-    return None if model == "per_wheel" else model
+    spec = VEHICLES[vehicle]() if isinstance(vehicle, str) else vehicle
+    return None if spec.track_model == "per_wheel" else spec.track_model
 
 
 def _terrain(value: Any) -> TerrainSpec:
@@ -348,11 +364,9 @@ def _sensor_noise(value: Any) -> SensorNoise:
     )
 
 
-def _beacons(value: Any) -> Any:
+def _beacons(value: Beacons) -> Beacons:
     """``None``/``False`` (none), ``True``/``"default"``, a scanner, or (n, 2) positions,
     which are stored as a tuple of (x, y) pairs so configs stay comparable and hashable."""
-    from slipenv.sensors.beacons import BeaconScanner, as_beacons_xy
-
     if value is None or value is False or value is True or isinstance(value, BeaconScanner):
         return value
     if isinstance(value, str):
@@ -364,58 +378,11 @@ def _beacons(value: Any) -> Any:
     return tuple((float(x), float(y)) for x, y in xy)
 
 
-def _vehicle_names():
-    from slipenv.vehicles.presets import VEHICLES
-
-    return VEHICLES
-
-
-def _vehicle_type():
-    from slipenv.vehicles.spec import VehicleSpec
-
-    return VehicleSpec
-
-
-def _soil_names():
-    from slipenv.terramechanics.presets import SOILS
-
-    return SOILS
-
-
-def _soil_type():
-    from slipenv.terramechanics.soil import Soil
-
-    return Soil
-
-
-def _force_model_names():
-    from slipenv.terramechanics.models import FORCE_MODELS
-
-    return FORCE_MODELS
-
-
-def _path_names():
-    from slipenv.paths import PATHS
-
-    return PATHS
-
-
-def _path_type():
-    from slipenv.paths import Path
-
-    return Path
-
-
-def _check_path_values(name: str, kwargs: dict) -> None:
+def _check_path_values(name: str, kwargs: dict[str, Any]) -> None:
     """Build the path once (well under a millisecond), so that a bad value (a negative
     speed) is an error of the config, not of the first ``make``."""
-    from slipenv.envs.factory import make_path
-
     make_path(name, kwargs)
 
 
 def _path_parameters(name: str) -> list[str]:
-    from slipenv.paths import PATHS
-
     return list(inspect.signature(PATHS[name]).parameters)
-

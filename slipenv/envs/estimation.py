@@ -39,6 +39,7 @@ from slipenv.estimators.lindgren.ekf import LindgrenEKF
 from slipenv.estimators.lindgren.models import OracleSoil
 from slipenv.estimators.lindgren.params import LindgrenNoise
 from slipenv.estimators.skid_steer.endo import EndoOdometry
+from slipenv.sim.simulator import Simulator
 from slipenv.vehicles.spec import VehicleSpec
 
 ENDO_N_HARD_FLOOR = 0.824  # Yamauchi Table 1
@@ -200,7 +201,7 @@ def make_estimator(name: str, spec: VehicleSpec, context: dict, **kwargs: Any) -
         raise ValueError(f"bad options for estimator {name!r}: {exc}") from None
 
 
-def true_soil_for_oracle(sim, torque_scale: float = 1.0) -> OracleSoil:
+def true_soil_for_oracle(sim: Simulator, torque_scale: float = 1.0) -> OracleSoil:
     """The simulation's true effective radius and k_s per channel (privileged: oracle only).
 
     k_s = r dF/ds at s = 0 of the injected force law, at each driven wheel's current load and

@@ -4,39 +4,34 @@ from __future__ import annotations
 
 import difflib
 import inspect
-from typing import Any
+from collections.abc import Callable
+from typing import Any, cast
 
 import numpy as np
 
 from slipenv.paths import Path, path_by_name
-from slipenv.terramechanics.models import ContactGeometry, force_model_by_name
+from slipenv.terramechanics.models import ContactGeometry, ForceModel, force_model_by_name
 from slipenv.terramechanics.presets import soil_by_name
 from slipenv.terramechanics.soil import Soil
-from slipenv.terramechanics.soil_map import UniformSoil
+from slipenv.terramechanics.soil_map import SoilMap, UniformSoil
 from slipenv.vehicles.presets import vehicle_by_name
 from slipenv.vehicles.spec import VehicleSpec
 
-
-def make_vehicle(vehicle: Any) -> VehicleSpec:
-    """A vehicle spec from a preset name or a spec."""
-    if isinstance(vehicle, VehicleSpec):
-        return vehicle
-    if isinstance(vehicle, str):
-        return vehicle_by_name(vehicle)
-    raise ValueError(f"vehicle must be a preset name or VehicleSpec, got {vehicle!r}")
+ForceModelFactory = Callable[[ContactGeometry], ForceModel]
+"""A force model built for a wheel's contact geometry (the ``force_model`` option's callable)."""
 
 
-def make_soil_map(soil: Any, soil_map: Any):
-    """The soil map: the explicit map if given, else a uniform soil from a name or ``Soil``."""
+def make_vehicle(vehicle: str | VehicleSpec) -> VehicleSpec:
+    """A vehicle spec from a preset name or a spec (checked by :class:`SlipEnvConfig`)."""
+    return vehicle if isinstance(vehicle, VehicleSpec) else vehicle_by_name(vehicle)
+
+
+def make_soil_map(soil: str | Soil, soil_map: SoilMap | None) -> SoilMap:
+    """The soil map: the explicit map if given, else a uniform soil from a name or ``Soil``
+    (both checked by :class:`SlipEnvConfig`)."""
     if soil_map is not None:
-        if not hasattr(soil_map, "params_at"):
-            raise ValueError(f"soil_map must provide params_at(x, y), got {soil_map!r}")
         return soil_map
-    if isinstance(soil, str):
-        soil = soil_by_name(soil)
-    if not isinstance(soil, Soil):
-        raise ValueError(f"soil must be a soil name or Soil, got {soil!r}")
-    return UniformSoil(soil)
+    return UniformSoil(soil_by_name(soil) if isinstance(soil, str) else soil)
 
 
 def contact_geometry(spec: VehicleSpec) -> ContactGeometry:
@@ -48,26 +43,24 @@ def contact_geometry(spec: VehicleSpec) -> ContactGeometry:
     )
 
 
-def make_force_model(force_model: Any, spec: VehicleSpec, options: dict | None = None):
+def make_force_model(force_model: str | ForceModel | ForceModelFactory, spec: VehicleSpec,
+                     options: dict[str, Any] | None = None) -> ForceModel:
     """A force model from a name (built with ``options``, the config's
-    ``force_model_kwargs``), an instance, or a factory taking a ContactGeometry."""
+    ``force_model_kwargs``), an instance, or a factory taking a ContactGeometry.
+
+    The name, the kind of value and the options are checked by :class:`SlipEnvConfig`; what
+    only building can tell, a factory's return value, is checked here.
+    """
     geometry = contact_geometry(spec)
     if isinstance(force_model, str):
-        try:
-            return force_model_by_name(force_model, geometry, **(options or {}))
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"force_model_kwargs: {exc}") from None
-    if options:
-        raise ValueError("force_model_kwargs apply to a force model given by name, got "
-                         f"{force_model!r}")
+        return force_model_by_name(force_model, geometry, **(options or {}))
     if hasattr(force_model, "resistance_n") and not isinstance(force_model, type):
-        return force_model
-    if callable(force_model):
-        model = force_model(geometry)
-        if not hasattr(model, "resistance_n"):
-            raise ValueError("a force_model factory must return a ForceModel (with resistance_n)")
-        return model
-    raise ValueError(f"force_model must be a name, a ForceModel or a factory, got {force_model!r}")
+        return cast(ForceModel, force_model)
+    model = cast(ForceModelFactory, force_model)(geometry)
+    if not hasattr(model, "resistance_n"):
+        raise ValueError("force_model: a factory must return a ForceModel (with resistance_n), "
+                         f"got {model!r}")
+    return model
 
 
 def make_path(name: str, kwargs: dict) -> Path:

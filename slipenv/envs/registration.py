@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import difflib
 import json
-import math
 from importlib import resources
 from importlib.resources.abc import Traversable
 
@@ -142,12 +141,18 @@ def register_envs() -> None:
     ``gymnasium.make(id, **kwargs)`` overrides fields of that preset;
     ``gymnasium.make(id, config=cfg)`` replaces it (e.g. with a model fitted by
     ``slipenv diagnose``, see :func:`slipenv.diagnose.apply_model`).
+
+    No id has a registered ``max_episode_steps``: the env truncates itself after
+    ``max_episode_s`` at ``control_hz`` (``env.unwrapped.max_steps``), which are make kwargs,
+    whereas a registered step count is fixed when the id is registered and Gymnasium's
+    ``TimeLimit`` would cut an episode made longer (``max_episode_s``) or finer
+    (``control_hz``) at the preset's count. ``env.spec.max_episode_steps`` is therefore None
+    unless ``gymnasium.make(id, max_episode_steps=n)`` adds a ``TimeLimit`` of its own.
     """
-    for env_id, kwargs in PRESETS.items():
+    for env_id in PRESETS:
         if env_id in gym.registry:
             continue
-        steps = int(math.ceil(kwargs["max_episode_s"] * 20.0))
         gym.register(
             id=env_id, entry_point=ENTRY_POINT, kwargs={"config": preset_config(env_id)},
-            max_episode_steps=steps, disable_env_checker=False,
+            max_episode_steps=None, disable_env_checker=False,
         )

@@ -11,7 +11,7 @@ import math
 import os
 import sys
 import weakref
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -30,10 +30,12 @@ from slipenv.envs.factory import (
 )
 from slipenv.envs.render import render_camera_panel, render_map
 from slipenv.paths import Path, sample_path
+from slipenv.sensors.noise import SensorNoise
 from slipenv.sensors.onboard import SensorSuite
 from slipenv.sensors.trace_camera import TraceCameraConfig, TraceFrame
 from slipenv.sensors.trace_rig import TraceCameraRig, camera_config_for
 from slipenv.sim.simulator import PhysicsBlowUp, Simulator, VehicleTruth
+from slipenv.terrain.terrain import TerrainSpec
 from slipenv.vehicles.kinematics import twist_to_commands
 from slipenv.vehicles.spec import VehicleSpec
 
@@ -64,9 +66,12 @@ def _columns(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-def _as_float32(value: float) -> float:
-    """``value`` rounded to float32, as a float."""
-    return float(np.float32(value))
+def episode_steps(max_episode_s: float, control_hz: float) -> int:
+    """Steps of an episode of ``max_episode_s`` at ``control_hz``: the time limit rounded up
+    to a whole step, where a product within 1e-9 of an integer counts as that integer (40 s at
+    20 Hz is 800 steps, not 801 from the rounding of 1/20)."""
+    steps = max_episode_s * control_hz
+    return max(1, round(steps) if abs(steps - round(steps)) < 1e-9 else math.ceil(steps))
 
 
 def render_modes() -> list[str]:
@@ -165,15 +170,17 @@ class SlipEnv(gym.Env):
         soil_map = make_soil_map(cfg.soil, cfg.soil_map)
         force_model = make_force_model(cfg.force_model, self._vehicle, cfg.force_model_kwargs)
         beacons = self._make_beacons(cfg)
+        # SlipEnvConfig stores its terrain and sensor noise as specs (it converts the names
+        # and dicts it accepts).
+        terrain, noise = cast(TerrainSpec, cfg.terrain), cast(SensorNoise, cfg.sensor_noise)
         self._sim = Simulator(
-            self._vehicle, cfg.terrain, force_model, soil_map, physics_hz=cfg.physics_hz,
+            self._vehicle, terrain, force_model, soil_map, physics_hz=cfg.physics_hz,
             control_hz=cfg.control_hz, gui=render_mode == "human", multi_pass=cfg.multi_pass,
             castor_own_geometry=cfg.castor_own_geometry,
         )
         self._dt_s = self._sim.control_dt_s
-        self.max_steps = int(math.ceil(cfg.max_episode_s / self._dt_s))
-        self._sensors = SensorSuite(self._vehicle.counts_per_rad, cfg.sensor_noise,
-                                   beacons=beacons)
+        self.max_steps = episode_steps(cfg.max_episode_s, cfg.control_hz)
+        self._sensors = SensorSuite(self._vehicle.counts_per_rad, noise, beacons=beacons)
         self.observation_space = spaces.Box(OBS_LOW, OBS_HIGH, dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         self.estimator = None
@@ -230,7 +237,8 @@ class SlipEnv(gym.Env):
         see :func:`slipenv.envs.estimation.true_soil_for_oracle`)."""
         from slipenv.envs.estimation import true_soil_for_oracle
 
-        return true_soil_for_oracle(self._sim, self.config.sensor_noise.torque_scale)
+        noise = cast(SensorNoise, self.config.sensor_noise)
+        return true_soil_for_oracle(self._sim, noise.torque_scale)
 
     # -- construction hooks (overridable by subclasses) ------------------------------------
     def _make_path(self, cfg: SlipEnvConfig) -> Path:
@@ -278,7 +286,7 @@ class SlipEnv(gym.Env):
             self._camera_step(truth)
         self._steps = 0
         self._s_est = self._s_true = 0.0
-        self._last_action = (0.0, 0.0)  # the last clipped action, rounded to float32
+        self._last_action = (0.0, 0.0)  # the last clipped action
         self._trace, self._trace_est = [], []
         self._record(truth, estimate)
         obs = self._observe(estimate)
@@ -288,7 +296,6 @@ class SlipEnv(gym.Env):
         a0, a1 = _checked_action(action)
         if self.estimator is None:
             raise RuntimeError("call reset() before step()")
-        # clipped to [-1, 1] as np.clip would (the values are finite)
         a0, a1 = min(max(a0, -1.0), 1.0), min(max(a1, -1.0), 1.0)
         spec = self._vehicle
         speeds, steer = twist_to_commands(
@@ -314,9 +321,7 @@ class SlipEnv(gym.Env):
         gained = max(proj.s - self._s_true, 0.0)
         self._s_true = proj.s
         heading_err = wrap_angle(truth.yaw_rad - proj.heading_rad)
-        # |Δaction|^2 against the last action as the float32 the agent's array held; in floats,
-        # summed as np.sum sums two float64 values (the first, then the second added to it)
-        d0, d1 = a0 - self._last_action[0], a1 - self._last_action[1]
+        d0, d1 = a0 - self._last_action[0], a1 - self._last_action[1]  # Δaction
         terms = {
             "cross_track": -(proj.cross_track_m**2),
             "heading": -(heading_err**2),
@@ -325,7 +330,7 @@ class SlipEnv(gym.Env):
         }
         weights = self.config.reward_weights
         reward = float(sum(weights.get(k, 0.0) * v for k, v in terms.items()))
-        self._last_action = (_as_float32(a0), _as_float32(a1))
+        self._last_action = (a0, a1)
         done_path = self._s_true >= self._path.length_m - 1e-3
         lost = abs(proj.cross_track_m) > self.config.max_cross_track_m
         truncated = self._steps >= self.max_steps and not (done_path or lost)

@@ -1,4 +1,4 @@
-"""Evaluate controllers and agents the way RL and robotics users do (issue 12).
+"""Evaluate controllers and agents the way RL and robotics users do.
 
 - :func:`evaluate` — a policy over seeds on an env id: true-pose metrics (cross-track RMSE,
   success rate, energy, odometry error, evo-style APE/RPE), a table, JSON, a plot

@@ -146,11 +146,13 @@ def _cell_kwargs(path: str | Path, env_id: str, common: dict, variation: dict,
     own terrain, keeping its downhill direction)."""
     from slipenv.envs.config import SlipEnvConfig
     from slipenv.envs.registration import preset_config
+    from slipenv.terrain.terrain import TerrainSpec
 
     kwargs = {**common, **variation}
     try:
         cfg = SlipEnvConfig.from_kwargs(preset_config(env_id), **kwargs)
         if slope is not None:
+            assert isinstance(cfg.terrain, TerrainSpec)  # SlipEnvConfig keeps a spec
             if cfg.terrain.kind == "mounds":
                 raise ValueError("slopes_deg tilts flat or slope terrain, not mounds")
             terrain = {**dataclasses.asdict(cfg.terrain), "kind": "slope",

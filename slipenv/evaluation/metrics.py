@@ -18,12 +18,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol, cast
 
 import gymnasium as gym
 import numpy as np
 
+from slipenv.envs.config import SlipEnvConfig
 from slipenv.evaluation.trajectory import ape_translation, rmse, rpe_translation
+from slipenv.vehicles.spec import VehicleSpec
 
 RPE_DELTA_STEPS = 20
 """RPE pose separation Δ [env steps] (1 s at the envs' 20 Hz)."""
@@ -61,6 +63,16 @@ class EpisodeTrace:
                 np.asarray(self.est_pose).reshape(-1, 3))
 
 
+class _Recorded(Protocol):
+    """What :class:`TraceRecorder` reads from the env: a ``SlipEnv``, or a stand-in."""
+
+    @property
+    def config(self) -> SlipEnvConfig: ...
+
+    @property
+    def vehicle(self) -> VehicleSpec: ...
+
+
 class TraceRecorder:
     """Rollout recorder filling an :class:`EpisodeTrace` from the env's ``info``."""
 
@@ -78,7 +90,8 @@ class TraceRecorder:
         self.trace.est_pose.append(np.asarray(info["estimated_pose"], dtype=float).copy())
 
     def on_reset(self, env: gym.Env, obs: np.ndarray, info: dict) -> None:
-        base = env.unwrapped
+        # gymnasium types ``unwrapped`` as a plain Env; this recorder needs only these two
+        base = cast(_Recorded, env.unwrapped)
         noise = base.config.sensor_noise
         self._counts_per_rad = float(getattr(noise, "counts_per_rad", None)
                                      or base.vehicle.counts_per_rad)

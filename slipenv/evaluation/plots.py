@@ -7,6 +7,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
+from slipenv.envs.slip_env import SlipEnv
 from slipenv.evaluation.trajectory import ape_translation
 
 
@@ -15,7 +16,10 @@ def reference_xy(env_id: str, env_kwargs: dict | None = None, step_m: float = 0.
     """The reference path of ``env_id`` sampled every ``step_m`` [m], shape (n, 2)."""
     env = gym.make(env_id, **(env_kwargs or {}))
     try:
-        samples = env.unwrapped.path.sample(step_m)
+        base = env.unwrapped
+        if not isinstance(base, SlipEnv):
+            raise TypeError(f"{env_id} is not a slipenv environment")
+        samples = base.path.sample(step_m)
         return np.stack([samples.x_m, samples.y_m], axis=1)
     finally:
         env.close()

@@ -23,12 +23,13 @@ import math
 from collections.abc import Callable, Iterable
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from slipenv.contracts.frame import SensorFrame
 from slipenv.logs.log import Log
 from slipenv.logs.meta import LogMeta
-from slipenv.rollout import rollout
+from slipenv.rollout import PolicyPredictor, rollout
 from slipenv.terrain.terrain import TerrainSpec
 from slipenv.vehicles.kinematics import twist_to_commands
 from slipenv.vehicles.spec import VehicleSpec
@@ -109,7 +110,7 @@ class LogRecorder:
             raise ValueError("nothing recorded")
         names = list(self.rows[0])
         cols = {n: np.array([r[n] for r in self.rows], dtype=float) for n in names}
-        return Log.from_arrays(self.meta, **cols)
+        return Log.from_arrays(self.meta, require_ground_truth=True, **cols)
 
 
 class ExportRecorder:
@@ -189,7 +190,8 @@ class _ActionSequence:
         return action
 
 
-def export_episode(env, policy: Callable[[np.ndarray], Any] | None = None,
+def export_episode(env: gym.Env,
+                   policy: PolicyPredictor | Callable[[np.ndarray], Any] | None = None,
                    actions: Iterable[Any] | None = None, seed: int | None = None,
                    max_steps: int | None = None, columns: Iterable[str] | None = None,
                    notes: str = "") -> Log:
@@ -219,6 +221,7 @@ def export_episode(env, policy: Callable[[np.ndarray], Any] | None = None,
             raise ValueError("actions is empty")
         policy = _ActionSequence(feed)
         max_steps = len(feed)
+    assert policy is not None  # exactly one of policy and actions, checked above
     rollout(env, policy, seed=seed, max_steps=max_steps, recorders=[recorder])
     return recorder.to_log()
 

@@ -11,7 +11,7 @@ import math
 import re
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeGuard
 
 from slipenv.logs.bounds import META_BOUNDS, meta_range_text, meta_value_ok
 from slipenv.logs.errors import LogFormatError
@@ -266,7 +266,7 @@ def _validate_terrain(terrain: Any,
                    "'slope_downhill_azimuth_deg' must be null or a finite number")
 
 
-def _finite(value: Any) -> bool:
+def _finite(value: Any) -> TypeGuard[int | float]:
     return (isinstance(value, int | float) and not isinstance(value, bool)
             and math.isfinite(value))
 

@@ -156,7 +156,7 @@ class BeaconScanner:
         self.head_phase_rad = float(head_phase_rad)
         self._last: tuple[float, float, float, float] | None = None  # (t, x, y, yaw)
         # (x, y, beacons, world bearing of each beacon from there) at the last pose: the next
-        # scan starts from that pose, so its bearings need not be computed twice (issue 15)
+        # scan starts from that pose, so its bearings need not be computed twice
         self._last_bearings: tuple[float, float, np.ndarray, np.ndarray] | None = None
 
     def reset(self, t_s: float | None = None, x_m: float = 0.0, y_m: float = 0.0,

@@ -305,7 +305,7 @@ class TraceCamera:
         light = self._sunlight(height, sun)
         # albedo = 0.55 + 0.10 fbm - 0.08 floor, in float32, on one array: 0.10 fbm + 0.55 is
         # the same sum, and off the rut floor 0.08 * False = 0 leaves the value as it is (a
-        # full frame per operation saved: issue 15, the camera's cost per frame)
+        # full frame per operation saved: the camera's cost per frame)
         albedo = fbm_noise((rows, cols), rng)
         albedo *= np.float32(0.10)
         albedo += np.float32(0.55)
@@ -340,7 +340,7 @@ class TraceCamera:
         Flat ground (zero height gradient) gets one value, so only the window around the ruts
         (the nonzero height, 2 px wider for the gradient's stencil) is computed per pixel; the
         rest is the same expression evaluated on flat ground, so the image is bit for bit the
-        whole-image computation (issue 15: the camera's cost per frame).
+        whole-image computation at a fraction of the camera's cost per frame.
         """
         rows, cols = height.shape
         light = np.full((rows, cols), _lambert_light(np.zeros((1, 1), np.float32),

@@ -80,7 +80,7 @@ class ContactHistory:
         self.min_spacing_m, self.max_points = float(min_spacing_m), int(max_points)
         # Per wheel, the stored points and depths are rows lo..hi-1 of a buffer twice
         # ``max_points`` long, compacted to the front when it fills: ``tracks`` (every camera
-        # frame) slices instead of stacking hundreds of small arrays (issue 15).
+        # frame) slices instead of stacking hundreds of small arrays.
         n, capacity = len(self.names), 2 * self.max_points
         self._points = np.empty((n, capacity, 3))
         self._depth = np.empty((n, capacity))

@@ -61,7 +61,7 @@ def polyline_distance_window(uv_px: np.ndarray, shape: tuple[int, int], reach_px
     The same distances and along-track coordinates, bit for bit, on the window of the image
     around the rasterised centreline padded by ``reach_px``: every pixel outside it lies
     farther than ``reach_px`` from the line. A rut covers a few percent of the frame, so the
-    caller's per-pixel work shrinks with the window (issue 15). The distance transform runs on
+    caller's per-pixel work shrinks with the window. The distance transform runs on
     a crop holding the window (so every zero pixel of the mask) of at least
     ``EXACT_TRANSFORM_MIN_PIXELS``: OpenCV's precise L2 transform is then the exact Euclidean
     one (float32 ``sqrt`` of the integer squared distance, Felzenszwalb & Huttenlocher), which

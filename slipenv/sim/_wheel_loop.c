@@ -1,25 +1,14 @@
-/* The per-substep wheel-soil force loop of slipenv.sim.wheel_soil, compiled (issue 15 item 1).
+/* The per-substep wheel-soil force loop of slipenv.sim.wheel_soil (WheelSoilInjector).
  *
- * This file is a transcription, not a second source of the physics. Each function below
- * mirrors one plain Python function, operation for operation, so that the results are the
- * same bit for bit (tests/sim/test_wheel_loop_compiled.py checks every one of them against its
- * Python original under fuzzing, and every registered env against the Python loop):
- *
- *   relax_slip, lateral_soil_damping_n, longitudinal_soil_damping_n, rut_resistance_n,
- *   rut_resistance_vector_n       slipenv/terramechanics/slip_dynamics.py
- *   janosi (_okello_h)            slipenv/terramechanics/janosi.py   (janosi_forces)
- *   linear                        slipenv/terramechanics/lindgren.py (linear_slip_forces)
- *   reina (_exp_secant)           slipenv/terramechanics/reina.py    (reina_forces)
- *   kernel                        slipenv/terramechanics/models.py   (_PatchModel.scalar_kernel,
- *                                 ReinaForceModel.scalar_kernel's gross thrust)
- *   rut_following                 slipenv/terramechanics/bekker.py   (rut_following_compaction_n)
- *   WheelLoop.apply               WheelSoilInjector._python_apply and _patches
- *
- * Rounding is Python's: IEEE doubles, no fused multiply-add (setup.py: -ffp-contract=off),
- * libm's sqrt/expm1/pow as Python's math module and float ** use, and Python's own math.hypot
- * (CPython computes it with its own algorithm, not libm's hypot), called through the module.
- * Where Python would raise (a division by zero, pow overflowing), this raises the same
- * exception type.
+ * Per substep: read the contacts, the wheel links' states and the spin joints' rates from
+ * PyBullet (through pybullet's Python API, or through Bullet's C API once verified against it:
+ * bullet_native.h); per loaded wheel, the contact frame, then for a driven wheel the slip
+ * relaxation step, the force law and the two soil dampers, applied at the contact patch, and
+ * for every wheel the rate-independent motion resistance, applied at the wheel centre. The
+ * physics is not written here: every law is a function of slipenv/terramechanics/_laws.h
+ * (sources and equations there), the one implementation the Python API binds as well. A force
+ * model that is not one of slipenv's (its kernel_constants is None: a user's law) is called
+ * back as its Python kernel, (slip, tan_beta, load_n) -> (fx_n, fy_n, resistance_n).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -27,269 +16,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "_laws.h"
 #include "bullet_native.h"
-
-static PyObject *g_hypot = NULL; /* math.hypot */
-
-/* -- float helpers with Python's error behaviour ---------------------------------------- */
-
-static int py_hypot(double a, double b, double *out)
-{
-    PyObject *args[2];
-    args[0] = PyFloat_FromDouble(a);
-    args[1] = PyFloat_FromDouble(b);
-    PyObject *r = NULL;
-    if (args[0] && args[1])
-        r = PyObject_Vectorcall(g_hypot, args, 2, NULL);
-    Py_XDECREF(args[0]);
-    Py_XDECREF(args[1]);
-    if (r == NULL)
-        return -1;
-    *out = PyFloat_AS_DOUBLE(r);
-    Py_DECREF(r);
-    return 0;
-}
-
-static int py_div(double a, double b, double *out)
-{
-    if (b == 0.0) {
-        PyErr_SetString(PyExc_ZeroDivisionError, "float division by zero");
-        return -1;
-    }
-    *out = a / b;
-    return 0;
-}
-
-/* x ** y for x > 0 (loads), as float_pow: pow(), OverflowError on overflow. */
-static int py_pow(double x, double y, double *out)
-{
-    if (y == 0.0) {
-        *out = 1.0;
-        return 0;
-    }
-    double r = pow(x, y);
-    if (isinf(r) && isfinite(x) && isfinite(y)) {
-        PyErr_SetString(PyExc_OverflowError, "(34, 'Numerical result out of range')");
-        return -1;
-    }
-    *out = r;
-    return 0;
-}
-
-static inline double clip1(double v) { return v > 1.0 ? 1.0 : (v < -1.0 ? -1.0 : v); }
-
-/* -- slip_dynamics ----------------------------------------------------------------------- */
-
-static void relax_slip(double slip, double tan_beta, double rim, double vlong, double vlat,
-                       double h, double *s_out, double *t_out, double *vref_out)
-{
-    double v_ref = fabs(rim); /* max(|a|, |b|, |c|): the first of the largest, as builtins.max */
-    double a = fabs(vlong), c = fabs(vlat);
-    if (a > v_ref) v_ref = a;
-    if (c > v_ref) v_ref = c;
-    double leak = 1.0 + h * v_ref;
-    double s = (slip + h * (rim - vlong)) / leak;
-    double t = (tan_beta + h * vlat) / leak;
-    *s_out = clip1(s);
-    *t_out = clip1(t);
-    *vref_out = v_ref;
-}
-
-static double lateral_damping(double change, double v_ref, double d, double fade_speed)
-{
-    double fade = v_ref / fade_speed;
-    fade *= fade;
-    return -d * change / (1.0 + fade * fade);
-}
-
-static double longitudinal_damping(double rim, double vlong, double v_ref, double c,
-                                   double low_speed)
-{
-    double speed = v_ref / low_speed;
-    if (speed < 1.0)
-        return (1.0 - speed) * c * (rim - vlong);
-    return 0.0;
-}
-
-static void rut_resistance(double res, double state, double disp, double speed, double stick,
-                           double damping, double *r_out, double *u_out)
-{
-    double u = clip1(state + disp / stick);
-    double r = res * u + damping * speed;
-    r = r > res ? res : (r < -res ? -res : r);
-    *r_out = r;
-    *u_out = u;
-}
-
-static void rut_resistance_vector(double res, const double state[3], const double v[3],
-                                  double dt, double stick, double damping, double r_out[3],
-                                  double u_out[3])
-{
-    double h = dt / stick;
-    double ux = state[0] + h * v[0], uy = state[1] + h * v[1], uz = state[2] + h * v[2];
-    double norm = sqrt(ux * ux + uy * uy + uz * uz);
-    if (norm > 1.0) {
-        ux = ux / norm;
-        uy = uy / norm;
-        uz = uz / norm;
-    }
-    double rx = res * ux + damping * v[0];
-    double ry = res * uy + damping * v[1];
-    double rz = res * uz + damping * v[2];
-    norm = sqrt(rx * rx + ry * ry + rz * rz);
-    if (norm > res) {
-        double scale = res / norm;
-        rx = rx * scale;
-        ry = ry * scale;
-        rz = rz * scale;
-    }
-    r_out[0] = rx; r_out[1] = ry; r_out[2] = rz;
-    u_out[0] = ux; u_out[1] = uy; u_out[2] = uz;
-}
-
-/* -- force laws -------------------------------------------------------------------------- */
-
-enum { KIND_JANOSI = 0, KIND_LINEAR = 1, KIND_REINA = 2 };
-
-/* A force model bound to one soil: what `ForceModel.kernel_constants(soil)` returns
- * (slipenv.terramechanics.models.KernelConstants, a NamedTuple with these fields in order). */
-typedef struct {
-    int kind;
-    /* janosi, linear: cohesion force A c [N], tan phi, shear ratio L/K, kappa */
-    double ac, tan_phi, ratio, kappa;
-    /* reina: mu, C_x, C_y (divided by W_ref if scaled), A_x, A_y; scaled: 1 = load-scaled */
-    double mu, c_x, c_y, a_x, a_y;
-    int scaled;
-    /* reina gross thrust (compaction=True): raw C_x, and W_ref (used when scaled) */
-    int gross;
-    double gross_c_x, gross_w_ref;
-    /* resistance: f_r W + gamma W^e */
-    double f_r, gamma, exponent;
-} Kernel;
-
-#define X_SMALL 1e-5
-#define SIXTH (1.0 / 6.0)
-#define TINY 1e-300
-
-static double okello_h(double x)
-{
-    double xc = x > X_SMALL ? x : X_SMALL;
-    return (expm1(-xc) + xc) / (xc * xc) + (xc - x) * SIXTH;
-}
-
-static double exp_secant(double y) { return y > TINY ? -expm1(-y) / y : 1.0; }
-
-static int reina_forces(double slip, double tb, double load, double mu, double c_x, double c_y,
-                        double a_x, double a_y, double *fx, double *fy)
-{
-    if (load <= 0.0) {
-        *fx = 0.0;
-        *fy = 0.0;
-        return 0;
-    }
-    double hyp, sig;
-    if (py_hypot(slip, tb, &hyp) < 0 || py_div(hyp, mu * load, &sig) < 0)
-        return -1;
-    double k_x = c_x * exp_secant(c_x * sig) - load * a_x;
-    double k_y = c_y * exp_secant(c_y * sig) - load * a_y;
-    *fx = k_x > 0.0 ? slip * k_x : 0.0;
-    *fy = k_y > 0.0 ? -tb * k_y : 0.0;
-    return 0;
-}
-
-/* (fx, fy, resistance) of one wheel: the model's scalar kernel. */
-static int kernel_eval(const Kernel *k, double slip, double tb, double load, double *fx_out,
-                       double *fy_out, double *res_out)
-{
-    double fx, fy;
-    if (k->kind == KIND_JANOSI) {
-        if (load <= 0.0) {
-            fx = 0.0;
-            fy = 0.0;
-        } else {
-            double f_max = load * k->tan_phi + k->ac;
-            double lateral = tb * k->kappa;
-            double hyp;
-            if (py_hypot(slip, lateral, &hyp) < 0)
-                return -1;
-            double secant = f_max * okello_h(hyp * k->ratio) * k->ratio;
-            fx = secant * slip;
-            fy = -secant * lateral;
-        }
-    } else if (k->kind == KIND_LINEAR) {
-        double t = k->kappa * tb;
-        if (load <= 0.0) {
-            fx = 0.0;
-            fy = 0.0;
-        } else {
-            double half = 0.5 * k->ratio;
-            double hyp;
-            if (py_hypot(slip, t, &hyp) < 0)
-                return -1;
-            double excess = hyp * half;
-            double secant = (load * k->tan_phi + k->ac) * half / (excess > 1.0 ? excess : 1.0);
-            fx = secant * slip;
-            fy = -secant * t;
-        }
-    } else {
-        if (k->scaled) {
-            if (reina_forces(slip, tb, 1.0, k->mu, k->c_x, k->c_y, k->a_x, k->a_y, &fx, &fy) < 0)
-                return -1;
-            fx = fx * load;
-            fy = fy * load;
-        } else if (reina_forces(slip, tb, load, k->mu, k->c_x, k->c_y, k->a_x, k->a_y, &fx,
-                                &fy) < 0) {
-            return -1;
-        }
-    }
-    double res = k->f_r * load;
-    if (k->gamma != 0.0) {
-        double w_e;
-        if (py_pow(load, k->exponent, &w_e) < 0)
-            return -1;
-        res += k->gamma * w_e;
-    }
-    if (k->gross) {
-        double sigma;
-        if (py_hypot(slip, tb, &sigma) < 0)
-            return -1;
-        if (sigma > 0.0 && k->gamma != 0.0) {
-            double y, w_e;
-            if (py_div(k->gross_c_x * sigma,
-                       k->mu * (k->scaled ? k->gross_w_ref : load), &y) < 0
-                || py_pow(load, k->exponent, &w_e) < 0)
-                return -1;
-            fx += k->gamma * w_e * -expm1(-y) * slip / sigma;
-        }
-    }
-    *fx_out = fx;
-    *fy_out = fy;
-    *res_out = res;
-    return 0;
-}
-
-static double rut_following(double compaction, double rut_compaction)
-{
-    double extra = compaction - rut_compaction;
-    return extra > 0.0 ? extra : 0.0;
-}
-
-static int parse_kernel(PyObject *spec, Kernel *k)
-{
-    /* (kind, ac, tan_phi, ratio, kappa, mu, c_x, c_y, a_x, a_y, scaled, gross, gross_c_x,
-        gross_w_ref, f_r, gamma, exponent): ForceModel.kernel_constants */
-    memset(k, 0, sizeof(*k));
-    if (!PyArg_ParseTuple(spec, "idddddddddppddddd;kernel constants", &k->kind, &k->ac,
-                          &k->tan_phi, &k->ratio, &k->kappa, &k->mu, &k->c_x, &k->c_y, &k->a_x,
-                          &k->a_y, &k->scaled, &k->gross, &k->gross_c_x, &k->gross_w_ref,
-                          &k->f_r, &k->gamma, &k->exponent))
-        return -1;
-    if (k->kind < KIND_JANOSI || k->kind > KIND_REINA) {
-        PyErr_Format(PyExc_ValueError, "unknown kernel kind %d", k->kind);
-        return -1;
-    }
-    return 0;
-}
 
 /* -- the loop ---------------------------------------------------------------------------- */
 
@@ -298,7 +26,9 @@ typedef struct {
     int lead_front, lead_back;
     double rut_ratio_front, rut_ratio_back; /* bekker.rut_load_ratio of each leader's rut */
     double r_eff, h, c_long, d_lat, rut_damping;
-    Kernel kernel;
+    LawsKernel kernel;
+    PyObject *py_kernel; /* a user's law (Python callable), else NULL: `kernel` runs */
+    double f_r;          /* rolling resistance coefficient of the law (multi-pass) */
     /* state */
     double s, b, rut, rut_vec[3];
     /* last substep */
@@ -337,6 +67,10 @@ typedef struct {
     /* native queries through Bullet's C API (bullet_native.h) */
     BulletApi api;
     int bound, native, verify, mismatch, contact_status, state_status;
+    BulletBuffers buf;  /* the structs pybullet fills, each with its guard region */
+    long verify_every;  /* compare with the Python API every this-many substeps with contact */
+    long contact_substeps, verifications;
+    PyObject *on_mismatch; /* called with the reason when a check fails (warns once) */
     /* optional timing of the substep's parts (slipenv bench): seconds, substeps */
     int timing;
     double t_read, t_law, t_apply;
@@ -392,6 +126,8 @@ static int inputs_equal(const Inputs *a, const Inputs *b, int n, int n_spin)
 
 static void loop_dealloc(WheelLoop *self)
 {
+    bullet_buffers_free(&self->buf);
+    Py_XDECREF(self->on_mismatch);
     Py_XDECREF(self->contacts_fn);
     Py_XDECREF(self->links_fn);
     Py_XDECREF(self->joints_fn);
@@ -405,6 +141,9 @@ static void loop_dealloc(WheelLoop *self)
     Py_XDECREF(self->world_obj);
     PyMem_Free(self->link_to_wheel);
     PyMem_Free(self->spin_joints);
+    if (self->w != NULL)
+        for (int k = 0; k < self->n; k++)
+            Py_XDECREF(self->w[k].py_kernel);
     PyMem_Free(self->w);
     inputs_free(&self->in);
     inputs_free(&self->check);
@@ -443,7 +182,7 @@ static int loop_init(WheelLoop *self, PyObject *args, PyObject *kwds)
     self->body_obj = PyLong_FromLong(self->body);
     self->client_obj = PyLong_FromLong(self->client);
     /* getContactPoints(body, ground, -2, -2, client); getLinkStates(body, links, 1, 0,
-       client); getJointStates(body, spin_joints, client): positional, as the Python loop. */
+       client); getJointStates(body, spin_joints, client): positional (keywords cost more). */
     self->contacts_args = Py_BuildValue("(lliil)", self->body, self->ground, -2, -2,
                                         self->client);
     self->links_args = Py_BuildValue("(lOiil)", self->body, links, 1, 0, self->client);
@@ -511,15 +250,16 @@ static int check_wheel(WheelLoop *self, int k)
 }
 
 /* set_wheel(k, driven, spin_index, r_eff, h, c_long, d_lat, rut_damping, lead_front,
-             lead_back, rut_ratio_front, rut_ratio_back, kernel_constants) */
+             lead_back, rut_ratio_front, rut_ratio_back, law, f_r): law is the force model's
+   KernelConstants (a tuple, evaluated by laws_kernel) or its Python kernel (a user's law). */
 static PyObject *loop_set_wheel(WheelLoop *self, PyObject *args)
 {
     int k, driven, spin_index, lead_front, lead_back;
-    double r_eff, h, c_long, d_lat, rut_damping, ratio_front, ratio_back;
-    PyObject *spec;
-    if (!PyArg_ParseTuple(args, "ipidddddiiddO!", &k, &driven, &spin_index, &r_eff, &h,
+    double r_eff, h, c_long, d_lat, rut_damping, ratio_front, ratio_back, f_r;
+    PyObject *law;
+    if (!PyArg_ParseTuple(args, "ipidddddiiddOd", &k, &driven, &spin_index, &r_eff, &h,
                           &c_long, &d_lat, &rut_damping, &lead_front, &lead_back, &ratio_front,
-                          &ratio_back, &PyTuple_Type, &spec))
+                          &ratio_back, &law, &f_r))
         return NULL;
     if ((lead_front >= self->n) || (lead_back >= self->n)) {
         PyErr_Format(PyExc_IndexError, "leader out of range (n = %d)", self->n);
@@ -527,9 +267,19 @@ static PyObject *loop_set_wheel(WheelLoop *self, PyObject *args)
     }
     if (check_wheel(self, k) < 0)
         return NULL;
-    Kernel kern;
-    if (parse_kernel(spec, &kern) < 0)
+    LawsKernel kern;
+    memset(&kern, 0, sizeof(kern));
+    PyObject *py_kernel = NULL;
+    if (PyTuple_Check(law)) {
+        if (laws_parse_kernel(law, &kern) < 0)
+            return NULL;
+    } else if (PyCallable_Check(law)) {
+        py_kernel = law;
+        Py_INCREF(py_kernel);
+    } else {
+        PyErr_SetString(PyExc_TypeError, "law must be kernel constants or a callable kernel");
         return NULL;
+    }
     Wheel *w = &self->w[k];
     w->driven = driven;
     w->spin_index = spin_index;
@@ -543,7 +293,32 @@ static PyObject *loop_set_wheel(WheelLoop *self, PyObject *args)
     w->rut_ratio_front = ratio_front;
     w->rut_ratio_back = ratio_back;
     w->kernel = kern;
+    Py_XSETREF(w->py_kernel, py_kernel);
+    w->f_r = py_kernel != NULL ? f_r : kern.f_r;
     Py_RETURN_NONE;
+}
+
+/* (fx, fy, resistance) of wheel w's force law; -1 with an exception from a user's law. */
+static int wheel_law(const Wheel *w, double slip, double tan_beta, double load, double *fx,
+                     double *fy, double *res)
+{
+    if (w->py_kernel == NULL) {
+        laws_kernel(&w->kernel, slip, tan_beta, load, fx, fy, res);
+        return 0;
+    }
+    PyObject *args[3] = {PyFloat_FromDouble(slip), PyFloat_FromDouble(tan_beta),
+                         PyFloat_FromDouble(load)};
+    PyObject *out = NULL;
+    if (args[0] && args[1] && args[2])
+        out = PyObject_Vectorcall(w->py_kernel, args, 3, NULL);
+    for (int i = 0; i < 3; i++)
+        Py_XDECREF(args[i]);
+    if (out == NULL)
+        return -1;
+    int ok = PyArg_ParseTuple(out, "ddd;a force kernel returns (fx_n, fy_n, resistance_n)", fx,
+                              fy, res);
+    Py_DECREF(out);
+    return ok ? 0 : -1;
 }
 
 static PyObject *loop_reset(WheelLoop *self, PyObject *unused)
@@ -635,7 +410,8 @@ static int submit_forces(WheelLoop *self, b3Handle sm)
     return 0;
 }
 
-/* Resistance of wheel k in the rut of the wheel ahead (WheelSoilInjector._multi_pass). */
+/* Resistance of wheel k in the rut of the wheel ahead in the direction of travel, whose rut
+ * is as deep as this wheel would sink under q W_leader (laws_multi_pass). */
 static int multi_pass(WheelLoop *self, int k, double res, double load_n, double v_long,
                       double *out)
 {
@@ -646,13 +422,11 @@ static int multi_pass(WheelLoop *self, int k, double res, double load_n, double 
         *out = res;
         return 0;
     }
-    double f_r = w->kernel.f_r, fx, fy, lead;
+    double fx, fy, lead_res;
     double w_lead = (forward ? w->rut_ratio_front : w->rut_ratio_back) * self->w[leader].load;
-    if (kernel_eval(&w->kernel, 0.0, 0.0, w_lead, &fx, &fy, &lead) < 0)
+    if (wheel_law(w, 0.0, 0.0, w_lead, &fx, &fy, &lead_res) < 0)
         return -1;
-    lead = lead - f_r * w_lead;
-    double rolling = f_r * load_n;
-    *out = rolling + rut_following(res - rolling, lead);
+    *out = laws_multi_pass(res, load_n, lead_res, w_lead, w->f_r);
     return 0;
 }
 
@@ -666,7 +440,7 @@ static void clear_patches(WheelLoop *self, Inputs *in)
 }
 
 /* Add one contact point (load f > 0 on `link`, point p and normal nrm on the ground) to the
- * wheel's load-weighted sums (WheelSoilInjector._patches). */
+ * wheel's load-weighted sums (the contact patch: laws_contact_frame). */
 static void add_contact(WheelLoop *self, Inputs *in, long link, double f, const double *p,
                         const double *nrm)
 {
@@ -779,11 +553,11 @@ static int acquire_native(WheelLoop *self, Inputs *in, b3Handle sm)
         return -1;
     }
     self->contact_status = type;
-    struct b3ContactInformation info;
-    api->contacts(sm, &info);
+    struct b3ContactInformation *info = self->buf.contacts;
+    api->contacts(sm, info);
     clear_patches(self, in);
-    for (int i = 0; i < info.m_numContactPoints; i++) {
-        const struct b3ContactPointData *cp = &info.m_contactPointData[i];
+    for (int i = 0; i < info->m_numContactPoints; i++) {
+        const struct b3ContactPointData *cp = &info->m_contactPointData[i];
         double f = cp->m_normalForce;
         if (f <= 0.0)
             continue;
@@ -799,34 +573,53 @@ static int acquire_native(WheelLoop *self, Inputs *in, b3Handle sm)
         return -1;
     }
     self->state_status = type;
+    struct b3LinkState *ls = self->buf.link;
     for (int k = 0; k < self->n; k++) {
-        struct b3LinkState ls;
         double *d = &in->link[LINK_WIDTH * k];
-        if (!api->link_state(sm, status, self->w[k].link, &ls)) {
+        if (!api->link_state(sm, status, self->w[k].link, ls)) {
             PyErr_Format(self->error_type, "getLinkStates failed for link %d", self->w[k].link);
             return -1;
         }
-        memcpy(d, ls.m_worldOrientation, 4 * sizeof(double));
-        memcpy(d + 4, ls.m_worldPosition, 3 * sizeof(double));
-        memcpy(d + 7, ls.m_worldLinearVelocity, 3 * sizeof(double));
-        memcpy(d + 10, ls.m_worldAngularVelocity, 3 * sizeof(double));
+        memcpy(d, ls->m_worldOrientation, 4 * sizeof(double));
+        memcpy(d + 4, ls->m_worldPosition, 3 * sizeof(double));
+        memcpy(d + 7, ls->m_worldLinearVelocity, 3 * sizeof(double));
+        memcpy(d + 10, ls->m_worldAngularVelocity, 3 * sizeof(double));
     }
+    struct b3JointSensorState *js = self->buf.joint;
     for (int j = 0; j < self->n_spin; j++) {
-        struct b3JointSensorState js;
-        if (!api->joint_state(sm, status, self->spin_joints[j], &js)) {
+        if (!api->joint_state(sm, status, self->spin_joints[j], js)) {
             PyErr_Format(self->error_type, "getJointStates failed for joint %d",
                          self->spin_joints[j]);
             return -1;
         }
-        in->rate[j] = js.m_jointVelocity;
+        in->rate[j] = js->m_jointVelocity;
     }
     return 0;
 }
 
+/* A failed check: keep this substep's Python-API readings (self->check), read through the
+ * Python API from now on, and report `why` once (on_mismatch). -1 if the report raised (a
+ * warnings filter set to "error"), else 0. */
+static int native_fallback(WheelLoop *self, const char *why)
+{
+    Inputs tmp = self->in;
+    self->in = self->check;
+    self->check = tmp;
+    self->native = self->verify = 0;
+    self->mismatch = 1;
+    if (self->on_mismatch == NULL)
+        return PyErr_WarnEx(PyExc_RuntimeWarning, why, 1);
+    PyObject *r = PyObject_CallFunction(self->on_mismatch, "s", why);
+    Py_XDECREF(r);
+    return r == NULL ? -1 : 0;
+}
+
 /* This substep's readings into self->in: natively once verified, else through the Python
- * API. Until a substep with a wheel on the ground has read the same bits both ways, both
- * run; a difference switches the loop to the Python API for good (self->mismatch). Returns
- * the native client handle to apply the forces through, or NULL for the Python API (check
+ * API. The native readings are compared with the Python API's bit for bit on every substep up
+ * to the first with a wheel on the ground, then on every verify_every-th substep with contact;
+ * the guard regions after the structs pybullet filled are checked on every substep. A failed
+ * check switches the loop to the Python API for good (native_fallback). Returns the native
+ * client handle to apply the forces through, or NULL for the Python API (check
  * PyErr_Occurred). */
 static b3Handle acquire(WheelLoop *self)
 {
@@ -840,25 +633,38 @@ static b3Handle acquire(WheelLoop *self)
         return NULL;
     }
     int failed = acquire_native(self, &self->in, sm) < 0;
-    if (failed && !self->verify)
+    const char *broken = bullet_guard_broken(&self->buf);
+    if (failed && !self->verify && broken == NULL)
         return NULL;
-    if (self->verify) {
-        PyErr_Clear(); /* a native failure before verification is a mismatch, not an error */
-        if (acquire_python(self, &self->check) < 0)
-            return NULL;
-        if (failed || !inputs_equal(&self->in, &self->check, self->n, self->n_spin)) {
-            Inputs tmp = self->in;
-            self->in = self->check;
-            self->check = tmp;
-            self->native = self->verify = 0;
-            self->mismatch = 1;
-            return NULL;
-        }
-        for (int k = 0; k < self->n; k++)
-            if (self->in.has_patch[k])
-                self->verify = 0;
+    int contact = 0;
+    for (int k = 0; k < self->n; k++)
+        contact |= self->in.has_patch[k];
+    int periodic = 0;
+    if (!self->verify && !failed && contact && self->verify_every > 0
+        && ++self->contact_substeps >= self->verify_every) {
+        self->contact_substeps = 0;
+        periodic = 1;
     }
-    return sm;
+    if (!self->verify && !periodic && broken == NULL)
+        return sm;
+    PyErr_Clear(); /* a native failure while checking is a mismatch, not an error */
+    if (acquire_python(self, &self->check) < 0)
+        return NULL;
+    self->verifications += 1;
+    char why[160];
+    if (broken != NULL)
+        PyOS_snprintf(why, sizeof why, "the guard region after %s was overwritten", broken);
+    else if (failed)
+        PyOS_snprintf(why, sizeof why, "a native query failed where the Python API's did not");
+    else if (!inputs_equal(&self->in, &self->check, self->n, self->n_spin))
+        PyOS_snprintf(why, sizeof why, "the native readings differ from the Python API's");
+    else {
+        if (contact)
+            self->verify = 0;
+        return sm;
+    }
+    native_fallback(self, why);
+    return NULL;
 }
 
 /* One substep: read PyBullet, compute every wheel's forces, apply them. */
@@ -887,89 +693,73 @@ static int loop_step(WheelLoop *self)
             continue;
         }
         const double *d = &in->link[LINK_WIDTH * k];
-        const double *q = d, *centre = d + 4, *v = d + 7;
-        const double *a = &in->patch[6 * k];
-        double inv_w, inv;
-        if (py_div(1.0, load, &inv_w) < 0)
+        const double *centre = d + 4;
+        LawsFrame f;
+        if (laws_contact_frame(&in->patch[6 * k], load, d, centre, d + 7, d + 10, &f) < 0) {
+            PyErr_Format(PyExc_ZeroDivisionError, "degenerate contact frame at wheel %d", k);
             return -1;
-        double cx = a[0] * inv_w, cy = a[1] * inv_w, cz = a[2] * inv_w;
-        double nx = a[3], ny = a[4], nz = a[5];
-        if (py_div(1.0, sqrt(nx * nx + ny * ny + nz * nz), &inv) < 0)
-            return -1;
-        nx = nx * inv; ny = ny * inv; nz = nz * inv;
-        double qx = q[0], qy = q[1], qz = q[2], qw = q[3];
-        double ax = 2.0 * (qx * qy - qw * qz);
-        double ay = 1.0 - 2.0 * (qx * qx + qz * qz);
-        double az = 2.0 * (qy * qz + qw * qx);
-        double ex = ay * nz - az * ny, ey = az * nx - ax * nz, ez = ax * ny - ay * nx;
-        if (py_div(1.0, sqrt(ex * ex + ey * ey + ez * ez), &inv) < 0)
-            return -1;
-        ex = ex * inv; ey = ey * inv; ez = ez * inv;
-        double lx = ny * ez - nz * ey, ly = nz * ex - nx * ez, lz = nx * ey - ny * ex;
-        double px = centre[0], py = centre[1], pz = centre[2];
-        double vx = v[0], vy = v[1], vz = v[2];
-        double v_long = vx * ex + vy * ey + vz * ez;
+        }
+        const double *e = f.e, *l = f.l;
+        double v_long = f.v_long;
         double force[3], r_abs;
         if (w->driven) {
-            const double *om = d + 10;
             if (w->spin_index < 0 || w->spin_index >= self->n_spin) {
                 PyErr_SetString(PyExc_IndexError, "driven wheel without a spin joint state");
                 return -1;
             }
-            double rate = in->rate[w->spin_index];
-            double wx = om[0], wy = om[1], wz = om[2];
-            double rx = cx - px, ry = cy - py, rz = cz - pz;
-            double v_lat = ((vx + wy * rz - wz * ry) * lx + (vy + wz * rx - wx * rz) * ly
-                            + (vz + wx * ry - wy * rx) * lz);
-            double r_omega = w->r_eff * rate;
+            double r_omega = w->r_eff * in->rate[w->spin_index];
             double t_old = w->b, s, t, v_ref;
-            relax_slip(w->s, t_old, r_omega, v_long, v_lat, w->h, &s, &t, &v_ref);
+            laws_relax_slip(w->s, t_old, r_omega, v_long, f.v_lat, w->h, &s, &t, &v_ref);
             w->s = s;
             w->b = t;
             double f_long, f_lat, res;
-            if (kernel_eval(&w->kernel, s, t, load, &f_long, &f_lat, &res) < 0)
+            if (wheel_law(w, s, t, load, &f_long, &f_lat, &res) < 0)
                 return -1;
             w->fx = f_long;
             w->fy = f_lat;
-            double d_y = lateral_damping(t - t_old, v_ref, w->d_lat, self->fade_speed);
-            double d_x = longitudinal_damping(r_omega, v_long, v_ref, w->c_long,
-                                              self->low_speed);
+            double d_y = laws_lateral_damping(t - t_old, v_ref, w->d_lat, self->fade_speed);
+            double d_x = laws_longitudinal_damping(r_omega, v_long, v_ref, w->c_long,
+                                                   self->low_speed);
             f_lat += d_y;
             f_long += d_x;
-            queue_force(self, w->link, f_long * ex + f_lat * lx, f_long * ey + f_lat * ly,
-                        f_long * ez + f_lat * lz, cx, cy, cz);
+            /* shear (traction, side force) acts at the contact patch: the motor feels r F */
+            queue_force(self, w->link, f_long * e[0] + f_lat * l[0],
+                        f_long * e[1] + f_lat * l[1], f_long * e[2] + f_lat * l[2], f.c[0],
+                        f.c[1], f.c[2]);
             if (self->multi_pass && multi_pass(self, k, res, load, v_long, &res) < 0)
                 return -1;
+            /* resistance along the heading, rate-independent (Coulomb-like) */
             double r_k, u_k;
-            rut_resistance(res, w->rut, v_long * dt, v_long, stick, w->rut_damping, &r_k, &u_k);
+            laws_rut_resistance(res, w->rut, v_long * dt, v_long, stick, w->rut_damping, &r_k,
+                                &u_k);
             w->rut = u_k;
             w->damper = fabs(d_x) + fabs(d_y) + fabs(r_k - res * u_k);
             w->res = r_abs = fabs(r_k);
-            force[0] = -r_k * ex;
-            force[1] = -r_k * ey;
-            force[2] = -r_k * ez;
+            for (int i = 0; i < 3; i++)
+                force[i] = -r_k * e[i];
         } else {
             double fx, fy, res;
-            if (kernel_eval(&w->kernel, 0.0, 0.0, load, &fx, &fy, &res) < 0)
+            if (wheel_law(w, 0.0, 0.0, load, &fx, &fy, &res) < 0)
                 return -1;
             if (self->multi_pass && multi_pass(self, k, res, load, v_long, &res) < 0)
                 return -1;
-            double v_side = vx * lx + vy * ly + vz * lz;
-            double vel[3] = {v_long * ex + v_side * lx, v_long * ey + v_side * ly,
-                             v_long * ez + v_side * lz};
-            double r[3], u[3];
-            rut_resistance_vector(res, w->rut_vec, vel, dt, stick, w->rut_damping, r, u);
-            w->rut_vec[0] = u[0]; w->rut_vec[1] = u[1]; w->rut_vec[2] = u[2];
+            /* a swivel castor: resistance along its contact velocity (in the contact plane) */
+            double vel[3], r[3], u[3], dd[3];
+            for (int i = 0; i < 3; i++)
+                vel[i] = v_long * e[i] + f.v_side * l[i];
+            laws_rut_resistance_vector(res, w->rut_vec, vel, dt, stick, w->rut_damping, r, u);
+            for (int i = 0; i < 3; i++) {
+                w->rut_vec[i] = u[i];
+                dd[i] = r[i] - res * u[i];
+                force[i] = -r[i];
+            }
             w->res = r_abs = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-            double dx = r[0] - res * u[0], dy = r[1] - res * u[1], dz = r[2] - res * u[2];
-            w->damper = sqrt(dx * dx + dy * dy + dz * dz);
-            force[0] = -r[0];
-            force[1] = -r[1];
-            force[2] = -r[2];
+            w->damper = sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
         }
         w->force[0] = force[0]; w->force[1] = force[1]; w->force[2] = force[2];
         if (r_abs != 0.0)
-            queue_force(self, w->link, force[0], force[1], force[2], px, py, pz);
+            queue_force(self, w->link, force[0], force[1], force[2], centre[0], centre[1],
+                        centre[2]);
     }
     double t2 = self->timing ? now_s() : 0.0;
     int rc = submit_forces(self, sm);
@@ -982,15 +772,26 @@ static int loop_step(WheelLoop *self)
     return rc;
 }
 
-/* bind_native(pybullet_path, clients_offset, n_clients, anchor_offset): read PyBullet through
- * Bullet's C API from the next substep on, verified against the Python API first. */
+/* bind_native(pybullet_path, clients_offset, n_clients, anchor_offset, verify_every=0,
+ * on_mismatch=None): read PyBullet through Bullet's C API from the next substep on, checked
+ * against the Python API (acquire). */
 static PyObject *loop_bind_native(WheelLoop *self, PyObject *args)
 {
     const char *path;
     unsigned long long clients_offset, anchor_offset;
-    long n_clients;
-    if (!PyArg_ParseTuple(args, "sKlK", &path, &clients_offset, &n_clients, &anchor_offset))
+    long n_clients, verify_every = 0;
+    PyObject *on_mismatch = Py_None;
+    if (!PyArg_ParseTuple(args, "sKlK|lO", &path, &clients_offset, &n_clients, &anchor_offset,
+                          &verify_every, &on_mismatch))
         return NULL;
+    if (verify_every < 0) {
+        PyErr_Format(PyExc_ValueError, "verify_every must be >= 0, got %ld", verify_every);
+        return NULL;
+    }
+    if (on_mismatch != Py_None && !PyCallable_Check(on_mismatch)) {
+        PyErr_SetString(PyExc_TypeError, "on_mismatch must be callable or None");
+        return NULL;
+    }
     if (self->client < 0 || self->client >= n_clients) {
         PyErr_Format(PyExc_ValueError, "client %ld outside pybullet's table of %ld", self->client,
                      n_clients);
@@ -1004,9 +805,33 @@ static PyObject *loop_bind_native(WheelLoop *self, PyObject *args)
                      "%llu", self->client, clients_offset);
         return NULL;
     }
+    if (self->buf.link == NULL && bullet_buffers_alloc(&self->buf) < 0)
+        return NULL;
+    bullet_guards_reset(&self->buf);
     self->api = api;
     self->bound = self->native = self->verify = 1;
     self->mismatch = 0;
+    self->verify_every = verify_every;
+    self->contact_substeps = self->verifications = 0;
+    Py_XDECREF(self->on_mismatch);
+    self->on_mismatch = NULL;
+    if (on_mismatch != Py_None) {
+        Py_INCREF(on_mismatch);
+        self->on_mismatch = on_mismatch;
+    }
+    Py_RETURN_NONE;
+}
+
+/* Test hook: overwrite one byte of the guard region after b3LinkState, as a pybullet whose
+ * struct is larger than the mirror would. */
+static PyObject *loop_scribble_guard(WheelLoop *self, PyObject *unused)
+{
+    if (self->buf.link == NULL) {
+        PyErr_SetString(PyExc_ValueError, "native queries are not bound (bind_native)");
+        return NULL;
+    }
+    unsigned char *guard = (unsigned char *)self->buf.link + sizeof(struct b3LinkState);
+    guard[0] ^= 0xFF;
     Py_RETURN_NONE;
 }
 
@@ -1077,11 +902,37 @@ static int set_native(WheelLoop *self, PyObject *value, void *closure)
         return -1;
     }
     if (v && !self->native) {
+        bullet_guards_reset(&self->buf);
         self->verify = 1;
         self->mismatch = 0;
+        self->contact_substeps = 0;
     }
     self->native = v;
     return 0;
+}
+
+static PyObject *get_verify_every(WheelLoop *self, void *closure)
+{
+    return PyLong_FromLong(self->verify_every);
+}
+
+static int set_verify_every(WheelLoop *self, PyObject *value, void *closure)
+{
+    long v = value ? PyLong_AsLong(value) : -1;
+    if (v == -1 && PyErr_Occurred())
+        return -1;
+    if (v < 0) {
+        PyErr_Format(PyExc_ValueError, "verify_every must be >= 0, got %ld", v);
+        return -1;
+    }
+    self->verify_every = v;
+    self->contact_substeps = 0;
+    return 0;
+}
+
+static PyObject *get_native_verifications(WheelLoop *self, void *closure)
+{
+    return PyLong_FromLong(self->verifications);
 }
 
 static PyObject *get_timing(WheelLoop *self, void *closure)
@@ -1142,22 +993,29 @@ static PyGetSetDef loop_getset[] = {
     {"native_verified", (getter)get_native_verified, NULL,
      "the native readings matched the Python API's bit for bit on a substep with contact", NULL},
     {"native_mismatch", (getter)get_native_mismatch, NULL,
-     "the native readings differed from the Python API's, so the loop uses the Python API",
-     NULL},
+     "a check of the native reader failed (readings differ from the Python API's, or a guard "
+     "region changed), so the loop uses the Python API", NULL},
+    {"verify_every", (getter)get_verify_every, (setter)set_verify_every,
+     "compare the native readings with the Python API's every this-many substeps with contact "
+     "(0: only until the first)", NULL},
+    {"native_verifications", (getter)get_native_verifications, NULL,
+     "substeps on which the native readings were compared with the Python API's", NULL},
     {NULL, NULL, NULL, NULL, NULL},
 };
 
 static PyMethodDef loop_methods[] = {
     {"set_wheel", (PyCFunction)loop_set_wheel, METH_VARARGS,
      "set_wheel(k, driven, spin_index, r_eff, h, c_long, d_lat, rut_damping, lead_front, "
-     "lead_back, rut_ratio_front, rut_ratio_back, kernel_constants): bind wheel k's constants "
-     "(once per soil sample)."},
+     "lead_back, rut_ratio_front, rut_ratio_back, law, f_r): bind wheel k's constants and "
+     "force law (KernelConstants or a Python kernel), once per soil sample."},
     {"reset", (PyCFunction)loop_reset, METH_NOARGS, "Zero every wheel's state."},
     {"apply", (PyCFunction)loop_apply, METH_NOARGS,
      "One substep's forces: query PyBullet, compute, apply."},
     {"bind_native", (PyCFunction)loop_bind_native, METH_VARARGS,
-     "bind_native(pybullet_path, clients_offset, n_clients, anchor_offset): read PyBullet "
-     "through Bullet's C API (slipenv.sim.bullet_native)."},
+     "bind_native(pybullet_path, clients_offset, n_clients, anchor_offset, verify_every=0, "
+     "on_mismatch=None): read PyBullet through Bullet's C API (slipenv.sim.bullet_native)."},
+    {"_scribble_guard", (PyCFunction)loop_scribble_guard, METH_NOARGS,
+     "Test hook: overwrite the guard region after b3LinkState (a detected mismatch)."},
     {NULL, NULL, 0, NULL},
 };
 
@@ -1174,100 +1032,14 @@ static PyTypeObject WheelLoopType = {
     .tp_new = PyType_GenericNew,
 };
 
-/* -- the transcribed functions, one by one, for the bit-for-bit tests --------------------- */
-
-static PyObject *fn_kernel(PyObject *mod, PyObject *args)
-{
-    PyObject *spec;
-    double slip, tb, load, fx, fy, res;
-    Kernel k;
-    if (!PyArg_ParseTuple(args, "O!ddd", &PyTuple_Type, &spec, &slip, &tb, &load)
-        || parse_kernel(spec, &k) < 0 || kernel_eval(&k, slip, tb, load, &fx, &fy, &res) < 0)
-        return NULL;
-    return Py_BuildValue("(ddd)", fx, fy, res);
-}
-
-static PyObject *fn_relax_slip(PyObject *mod, PyObject *args)
-{
-    double a[6], s, t, v;
-    if (!PyArg_ParseTuple(args, "dddddd", &a[0], &a[1], &a[2], &a[3], &a[4], &a[5]))
-        return NULL;
-    relax_slip(a[0], a[1], a[2], a[3], a[4], a[5], &s, &t, &v);
-    return Py_BuildValue("(ddd)", s, t, v);
-}
-
-static PyObject *fn_lateral(PyObject *mod, PyObject *args)
-{
-    double a[4];
-    if (!PyArg_ParseTuple(args, "dddd", &a[0], &a[1], &a[2], &a[3]))
-        return NULL;
-    return PyFloat_FromDouble(lateral_damping(a[0], a[1], a[2], a[3]));
-}
-
-static PyObject *fn_longitudinal(PyObject *mod, PyObject *args)
-{
-    double a[5];
-    if (!PyArg_ParseTuple(args, "ddddd", &a[0], &a[1], &a[2], &a[3], &a[4]))
-        return NULL;
-    return PyFloat_FromDouble(longitudinal_damping(a[0], a[1], a[2], a[3], a[4]));
-}
-
-static PyObject *fn_rut(PyObject *mod, PyObject *args)
-{
-    double a[6], r, u;
-    if (!PyArg_ParseTuple(args, "dddddd", &a[0], &a[1], &a[2], &a[3], &a[4], &a[5]))
-        return NULL;
-    rut_resistance(a[0], a[1], a[2], a[3], a[4], a[5], &r, &u);
-    return Py_BuildValue("(dd)", r, u);
-}
-
-static PyObject *fn_rut_vector(PyObject *mod, PyObject *args)
-{
-    double res, st[3], v[3], dt, stick, damping, r[3], u[3];
-    if (!PyArg_ParseTuple(args, "d(ddd)(ddd)ddd", &res, &st[0], &st[1], &st[2], &v[0], &v[1],
-                          &v[2], &dt, &stick, &damping))
-        return NULL;
-    rut_resistance_vector(res, st, v, dt, stick, damping, r, u);
-    return Py_BuildValue("((ddd)(ddd))", r[0], r[1], r[2], u[0], u[1], u[2]);
-}
-
-static PyObject *fn_rut_following(PyObject *mod, PyObject *args)
-{
-    double a, b;
-    if (!PyArg_ParseTuple(args, "dd", &a, &b))
-        return NULL;
-    return PyFloat_FromDouble(rut_following(a, b));
-}
-
-static PyMethodDef module_methods[] = {
-    {"kernel", fn_kernel, METH_VARARGS,
-     "kernel(kernel_constants, slip, tan_beta, load_n) -> (fx_n, fy_n, resistance_n)"},
-    {"relax_slip", fn_relax_slip, METH_VARARGS, "slip_dynamics.relax_slip"},
-    {"lateral_soil_damping_n", fn_lateral, METH_VARARGS, "slip_dynamics.lateral_soil_damping_n"},
-    {"longitudinal_soil_damping_n", fn_longitudinal, METH_VARARGS,
-     "slip_dynamics.longitudinal_soil_damping_n"},
-    {"rut_resistance_n", fn_rut, METH_VARARGS, "slip_dynamics.rut_resistance_n"},
-    {"rut_resistance_vector_n", fn_rut_vector, METH_VARARGS,
-     "slip_dynamics.rut_resistance_vector_n"},
-    {"rut_following_compaction_n", fn_rut_following, METH_VARARGS,
-     "bekker.rut_following_compaction_n"},
-    {NULL, NULL, 0, NULL},
-};
-
 static struct PyModuleDef module_def = {
     PyModuleDef_HEAD_INIT, "_wheel_loop",
-    "The compiled per-substep wheel-soil loop (a transcription of the plain functions).", -1,
-    module_methods,
+    "The per-substep wheel-soil loop (see WheelLoop); the laws are _laws.h's.", -1, NULL,
 };
 
 PyMODINIT_FUNC PyInit__wheel_loop(void)
 {
-    PyObject *math = PyImport_ImportModule("math");
-    if (math == NULL)
-        return NULL;
-    g_hypot = PyObject_GetAttrString(math, "hypot");
-    Py_DECREF(math);
-    if (g_hypot == NULL || PyType_Ready(&WheelLoopType) < 0)
+    if (PyType_Ready(&WheelLoopType) < 0)
         return NULL;
     PyObject *m = PyModule_Create(&module_def);
     if (m == NULL)

@@ -1,4 +1,4 @@
-/* Native access to a pybullet physics client through Bullet's C API (issue 15 item 2).
+/* Native access to a pybullet physics client through Bullet's C API.
  *
  * pybullet's Python functions are thin wrappers over Bullet's client C API
  * (examples/SharedMemory/PhysicsClientC_API.h): each one builds a command, submits it to the
@@ -9,10 +9,16 @@
  * static table sPhysicsClients1; slipenv.sim.bullet_native finds that table's offset in the
  * module's ELF symbol table and passes it here.
  *
- * The structs below mirror SharedMemoryPublic.h of the pybullet 3.2.x releases. A layout that
- * does not match cannot go unnoticed: the loop compares its first native readings with the
- * Python API's, bit for bit, and falls back to the Python API if they differ
- * (WheelLoop.native_verified).
+ * The structs below mirror SharedMemoryPublic.h of the pybullet releases listed in
+ * slipenv.sim.bullet_native.NATIVE_PYBULLET_VERSIONS (the only ones bound). Two checks catch a
+ * layout that does not match all the same: every struct pybullet fills lives on the heap,
+ * followed by a guard region of BULLET_GUARD_BYTES canary bytes checked after each substep's
+ * calls (a larger struct in pybullet writes into it); and the loop compares its native readings
+ * with the Python API's bit for bit until the first substep with contact, then on every
+ * verify_every-th substep with contact. Either check failing switches the loop to the Python
+ * API (WheelLoop.native_mismatch). pybullet's array of contact points is read in place with
+ * the mirror's stride, so a b3ContactPointData of another size shows in the readings, where
+ * the comparisons catch it.
  */
 #ifndef SLIPENV_BULLET_NATIVE_H
 #define SLIPENV_BULLET_NATIVE_H
@@ -70,6 +76,87 @@ struct b3JointSensorState {
     double m_jointForceTorque[6];
     double m_jointMotorTorque;
 };
+
+/* Bytes of canary after each struct pybullet fills: a struct grown by up to this much in a
+ * pybullet build writes only into the guard, where the check finds it. */
+#define BULLET_GUARD_BYTES 512
+
+/* The canary: a byte sequence no store of ints or doubles reproduces by chance. */
+static unsigned char bullet_canary[BULLET_GUARD_BYTES];
+
+static void bullet_canary_init(void)
+{
+    for (int i = 0; i < BULLET_GUARD_BYTES; i++)
+        bullet_canary[i] = (unsigned char)(0xA5 ^ (i * 0x3B) ^ (i >> 3));
+}
+
+/* The structs pybullet fills, each followed by its guard region (heap, one block each). */
+typedef struct {
+    struct b3ContactInformation *contacts;
+    struct b3LinkState *link;
+    struct b3JointSensorState *joint;
+} BulletBuffers;
+
+static void *bullet_guarded_alloc(size_t size)
+{
+    unsigned char *buf = PyMem_Malloc(size + BULLET_GUARD_BYTES);
+    if (buf != NULL) {
+        memset(buf, 0, size);
+        memcpy(buf + size, bullet_canary, BULLET_GUARD_BYTES);
+    }
+    return buf;
+}
+
+static void bullet_buffers_free(BulletBuffers *b)
+{
+    PyMem_Free(b->contacts);
+    PyMem_Free(b->link);
+    PyMem_Free(b->joint);
+    b->contacts = NULL;
+    b->link = NULL;
+    b->joint = NULL;
+}
+
+/* 0 on success, -1 with MemoryError set. */
+static int bullet_buffers_alloc(BulletBuffers *b)
+{
+    bullet_canary_init();
+    b->contacts = bullet_guarded_alloc(sizeof(struct b3ContactInformation));
+    b->link = bullet_guarded_alloc(sizeof(struct b3LinkState));
+    b->joint = bullet_guarded_alloc(sizeof(struct b3JointSensorState));
+    if (b->contacts == NULL || b->link == NULL || b->joint == NULL) {
+        bullet_buffers_free(b);
+        PyErr_NoMemory();
+        return -1;
+    }
+    return 0;
+}
+
+/* Restore every guard region (after a detected mismatch, before native reads resume). */
+static void bullet_guards_reset(BulletBuffers *b)
+{
+    memcpy((unsigned char *)b->contacts + sizeof(struct b3ContactInformation), bullet_canary,
+           BULLET_GUARD_BYTES);
+    memcpy((unsigned char *)b->link + sizeof(struct b3LinkState), bullet_canary,
+           BULLET_GUARD_BYTES);
+    memcpy((unsigned char *)b->joint + sizeof(struct b3JointSensorState), bullet_canary,
+           BULLET_GUARD_BYTES);
+}
+
+/* The name of the first struct whose guard region changed, or NULL if all are intact. */
+static const char *bullet_guard_broken(const BulletBuffers *b)
+{
+    if (memcmp((const unsigned char *)b->contacts + sizeof(struct b3ContactInformation),
+               bullet_canary, BULLET_GUARD_BYTES) != 0)
+        return "b3ContactInformation";
+    if (memcmp((const unsigned char *)b->link + sizeof(struct b3LinkState), bullet_canary,
+               BULLET_GUARD_BYTES) != 0)
+        return "b3LinkState";
+    if (memcmp((const unsigned char *)b->joint + sizeof(struct b3JointSensorState),
+               bullet_canary, BULLET_GUARD_BYTES) != 0)
+        return "b3JointSensorState";
+    return NULL;
+}
 
 typedef struct {
     b3Handle *clients; /* pybullet's sPhysicsClients1 */

@@ -1,16 +1,18 @@
 """Inject the terramechanic force law at every wheel contact, every physics substep.
 
-Per substep: one batched query each for contacts, wheel link states and spin-joint states (in
-the compiled loop, the same server commands through Bullet's C API, `native_queries`);
-per wheel, the contact frame, the slip state, the force law and the soil dampers in plain float
-arithmetic (tiny numpy arrays per wheel cost more than the physics, DESIGN §6); one
-``applyExternalForce`` per loaded wheel at its contact patch and one at its centre for the
-resistance. The physics is not written here: the force law is the model's float kernel
-(`slipenv.terramechanics.wheel_kernel`), and the slip relaxation step, the two soil dampers
-and the rate-independent (Coulomb-like) motion resistance are the plain functions of
-`slipenv.terramechanics.slip_dynamics` (sources and equations there). The soil under each
-wheel is sampled from the soil map once per control step (a wheel moves millimetres in one
-step; maps blend over decimetres).
+The substep runs in C (``slipenv/sim/_wheel_loop.c``, the ``apply`` of every injector): one
+batched query each for contacts, wheel link states and spin-joint states (through Bullet's C
+API once verified against pybullet's Python API, `native_queries`); per wheel, the contact
+frame, the slip state, the force law and the soil dampers; one ``applyExternalForce`` per
+loaded wheel at its contact patch and one at its centre for the resistance. The physics is not
+written here nor in the loop: every law is a function of
+``slipenv/terramechanics/_laws.h``, the one implementation, which the Python API of
+`slipenv.terramechanics` binds too (`slip_dynamics` gives the sources and equations of the
+slip relaxation step, the two soil dampers and the rate-independent motion resistance). A
+force model that is not one of slipenv's (a user's law: no `ForceModel.kernel_constants`) is
+called back as its Python kernel (`slipenv.terramechanics.wheel_kernel`). This class binds
+the per-wheel constants once per control step, when it samples the soil under each wheel from
+the soil map (a wheel moves millimetres in one step; maps blend over decimetres).
 
 Slip follows the convention of ``slipenv.terramechanics.contact``; the slip states relax over
 the contact's own length (`slip_dynamics.contact_relaxation_length_m`): for a wheel the front
@@ -25,7 +27,7 @@ per wheel (`slip_dynamics.rut_resistance_n`): full R against the travel at any s
 rest whatever holds the wheel, at most R. Driven wheels resist along their heading; castors
 (ideal swivels) along their contact velocity (`slip_dynamics.rut_resistance_vector_n`).
 Optionally (``multi_pass``) a wheel running in the rut of the wheel ahead compacts only the
-soil below that rut (`bekker.multi_pass_compaction_n`).
+soil below that rut (`bekker.rut_following_compaction_n`).
 """
 
 from __future__ import annotations
@@ -40,21 +42,12 @@ from slipenv.contracts.constants import G_MPS2
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.bullet_native import PYBULLET_API_ENV, client_table, python_api_forced
 from slipenv.sim.compiled import wheel_loop_module
-from slipenv.terramechanics.bekker import (
-    rut_following_compaction_n,
-    rut_load_ratio,
-    wheel_sinkage_float_m,
-)
+from slipenv.terramechanics.bekker import rut_load_ratio, wheel_sinkage_float_m
 from slipenv.terramechanics.contact import ContactGeometry
 from slipenv.terramechanics.models import ForceModel, wheel_kernel
 from slipenv.terramechanics.slip_dynamics import (
     contact_relaxation_length_m,
     critical_damping_ns_per_m,
-    lateral_soil_damping_n,
-    longitudinal_soil_damping_n,
-    relax_slip,
-    rut_resistance_n,
-    rut_resistance_vector_n,
 )
 from slipenv.terramechanics.soil import SoilParams
 from slipenv.terramechanics.soil_map import SoilMap, UniformSoil, soil_rows
@@ -87,6 +80,13 @@ class WheelContactState:
     resistance_n: np.ndarray
     in_contact: np.ndarray
     damper_n: np.ndarray
+
+
+def _read(name: str) -> Any:
+    """A read-only property: the compiled loop's per-wheel field `name`, as a list."""
+    def get(self: WheelSoilInjector) -> Any:
+        return getattr(self._loop, name)
+    return property(get, doc=f"Per-wheel ``{name}`` of the last substep (read-only).")
 
 
 class WheelSoilInjector:
@@ -135,25 +135,19 @@ class WheelSoilInjector:
     multi_pass : bool
         If True, a wheel running in the rut of the wheel ahead of it (same side, its contact
         within half a width of that wheel's line) meets only the compaction of the soil below
-        that rut (`bekker.multi_pass_compaction_n`). Default False.
+        that rut (`bekker.rut_following_compaction_n`). Default False.
     castor_own_geometry : bool
         If True, a castor's motion resistance is the Bekker compaction of its own wheel (its
         radius, width and contact length; `ForceModel.with_geometry`), not of the driven
         wheels' geometry the force model was built for. Default False (see
         ``SlipEnvConfig.castor_own_geometry`` for why).
-    compiled : bool or None
-        Run the substep loop compiled (``slipenv/sim/_wheel_loop.c``, a transcription of this
-        class's Python loop, tested bit for bit against it): None (default) when it was built
-        and the force model is one of slipenv's (`ForceModel.kernel_constants`), True to
-        require it (ValueError if it cannot), False for the Python loop
-        (`slipenv.sim.compiled`).
     native_queries : bool or None
-        With the compiled loop, read PyBullet and apply the forces through Bullet's C API,
-        which pybullet exports, instead of through pybullet's Python functions
-        (`slipenv.sim.bullet_native`): the same server commands without building tuples. The
-        loop checks its first native readings against the Python API bit for bit and keeps the
-        Python API if they differ. None (default) when available and ``SLIPENV_PYBULLET_API``
-        is not set, True to require it (ValueError if it cannot), False for the Python API.
+        Read PyBullet and apply the forces through Bullet's C API, which pybullet exports,
+        instead of through pybullet's Python functions (`slipenv.sim.bullet_native`): the same
+        server commands without building tuples. The loop verifies its native readings against
+        the Python API (`slipenv.sim.bullet_native` says when) and keeps the Python API if
+        they differ. None (default) when available and ``SLIPENV_PYBULLET_API`` is not set,
+        True to require it (ValueError if it cannot), False for the Python API.
     """
 
     def __init__(
@@ -171,7 +165,6 @@ class WheelSoilInjector:
         damping_ratio: float = 0.5,
         damping_speed_mps: float = 0.2,
         multi_pass: bool = False,
-        compiled: bool | None = None,
         castor_own_geometry: bool = False,
         native_queries: bool | None = None,
     ) -> None:
@@ -183,9 +176,9 @@ class WheelSoilInjector:
                 raise ValueError(f"{key} must be finite and > 0, got {value!r}")
         if not (math.isfinite(damping_ratio) and damping_ratio >= 0.0):
             raise ValueError(f"damping_ratio must be finite and >= 0, got {damping_ratio!r}")
-        for key, flag in (("compiled", compiled), ("native_queries", native_queries)):
-            if flag is not None and not isinstance(flag, bool):
-                raise ValueError(f"{key} must be True, False or None, got {flag!r}")
+        if native_queries is not None and not isinstance(native_queries, bool):
+            raise ValueError(f"native_queries must be True, False or None, got "
+                             f"{native_queries!r}")
         self.client = client
         self.body_id = body.body_id
         self.ground_id = ground_id
@@ -213,45 +206,26 @@ class WheelSoilInjector:
         self._f_r = float(getattr(force_model, "rolling_resistance_coeff", 0.0))
         self.leaders = _rut_leaders(spec) if self.multi_pass else [(-1, -1)] * self.n
         self._models = _wheel_models(spec, force_model, castor_own_geometry)
-        self._loop = self._compiled_loop(compiled)
+        self._loop = wheel_loop_module().WheelLoop(
+            p, self.body_id, self.ground_id, self.client, list(self.links),
+            list(self.spin_joints), self.dt_s, self.resistance_stick_m, self.damping_speed_mps,
+            self.low_speed_mps, self.multi_pass)
         self._bind_native(native_queries)
-        if self._loop is not None:
-            # The substep is the C loop itself: no Python frame per substep.
-            self.apply = self._loop.apply  # type: ignore[method-assign]
+        # The substep is the C loop itself: no Python frame per substep.
+        self.apply = self._loop.apply  # type: ignore[method-assign]
         self.reset()
-
-    def _compiled_loop(self, compiled: bool | None) -> Any:
-        """The compiled loop for this vehicle, or None for the Python loop (`compiled`)."""
-        if compiled is False:
-            return None
-        module = wheel_loop_module()
-        hook = getattr(self.force_model, "kernel_constants", None)
-        probe = hook(soil_rows(self.soil_map, [0.0], [0.0])[0]) if hook else None
-        if module is None or probe is None:
-            if compiled:
-                raise ValueError(
-                    "compiled=True but the compiled wheel loop is not available ("
-                    + ("not built or SLIPENV_PURE_PYTHON is set" if module is None else
-                       f"{type(self.force_model).__name__} is not one of slipenv's force "
-                       "models") + ")")
-            return None
-        return module.WheelLoop(p, self.body_id, self.ground_id, self.client, list(self.links),
-                                list(self.spin_joints), self.dt_s, self.resistance_stick_m,
-                                self.damping_speed_mps, self.low_speed_mps, self.multi_pass)
 
     def _bind_native(self, native_queries: bool | None) -> None:
         """Switch the compiled loop to Bullet's C API (`native_queries`)."""
         if native_queries is False:
             return
-        table = None if self._loop is None or python_api_forced() else client_table()
+        table = None if python_api_forced() else client_table()
         if table is not None:
             try:
                 self._loop.bind_native(*table)
                 return
             except OSError as exc:
                 reason = str(exc)
-        elif self._loop is None:
-            reason = "the compiled loop is not running"
         elif python_api_forced():
             reason = f"{PYBULLET_API_ENV} is set"
         else:
@@ -263,16 +237,9 @@ class WheelSoilInjector:
     @property
     def native_queries(self) -> bool:
         """True if the substeps read PyBullet through Bullet's C API (`native_queries`)."""
-        return self._loop is not None and bool(self._loop.native)
+        return bool(self._loop.native)
 
-    # The per-wheel state and the last substep's values live in the compiled loop when it runs
-    # (read here as lists), else in the Python attributes of the same names with a "_".
-    def _read(name: str) -> Any:  # noqa: N805 (a class-body helper, deleted below)
-        def get(self: WheelSoilInjector) -> Any:
-            loop = self._loop
-            return getattr(loop, name) if loop is not None else getattr(self, "_" + name)
-        return property(get, doc=f"Per-wheel ``{name}`` of the last substep (read-only).")
-
+    # The per-wheel state and the last substep's values live in the loop (read here as lists).
     s = _read("s")
     b = _read("b")
     load = _read("load")
@@ -283,42 +250,19 @@ class WheelSoilInjector:
     rut = _read("rut")
     rut_vec = _read("rut_vec")
     resistance_force_n = _read("resistance_force_n")
-    del _read
 
     @property
     def chassis_contact(self) -> bool:
         """Whether a body other than a wheel touched the ground since it was last cleared."""
-        loop = self._loop
-        return bool(loop.chassis_contact) if loop is not None else self._chassis_contact
+        return bool(self._loop.chassis_contact)
 
     @chassis_contact.setter
     def chassis_contact(self, value: bool) -> None:
-        if self._loop is not None:
-            self._loop.chassis_contact = bool(value)
-        else:
-            self._chassis_contact = bool(value)
-
-    @property
-    def is_compiled(self) -> bool:
-        """True if the substeps run in the compiled loop."""
-        return self._loop is not None
+        self._loop.chassis_contact = bool(value)
 
     def reset(self) -> None:
         """Zero the slip states and the recorded contact state."""
-        n = self.n
-        self._s = [0.0] * n
-        self._b = [0.0] * n
-        self._load = [0.0] * n
-        self._fx = [0.0] * n
-        self._fy = [0.0] * n
-        self._res = [0.0] * n
-        self._damper = [0.0] * n
-        self._rut = [0.0] * n  # pre-sliding state of the resistance element (driven wheels)
-        self._rut_vec: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * n  # castors
-        self._resistance_force_n: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * n
-        self._chassis_contact = False
-        if self._loop is not None:
-            self._loop.reset()
+        self._loop.reset()
         self.sample_soil(force=True)
 
     # -- soil ------------------------------------------------------------------------------
@@ -345,23 +289,18 @@ class WheelSoilInjector:
         self._damping = [self._soil_damping(k) for k in range(self.n)]
         self._rut_ratio = [self._rut_load_ratios(k, sp) for k, sp in enumerate(rows)]
         self._rut_damping = [self._resistance_damping(k) for k in range(self.n)]
-        if self._loop is None:
-            # What the Python `apply` reads per wheel, in one tuple (one unpacking instead of
-            # ten lookups).
-            self._wheel_rows = [
-                (k, self.links[k], self.driven[k], self.spin_index[k], self._r_eff[k],
-                 self._h[k], self._kernels[k], *self._damping[k], self._rut_damping[k])
-                for k in range(self.n)]
-        else:
-            constants: dict[tuple[int, int], Any] = {}
-            for model, sp in zip(self._models, rows, strict=True):
-                if (id(model), id(sp)) not in constants:
-                    constants[id(model), id(sp)] = model.kernel_constants(sp)
-            set_wheel = self._loop.set_wheel
-            for k, (model, sp) in enumerate(zip(self._models, rows, strict=True)):
-                set_wheel(k, self.driven[k], self.spin_index[k], self._r_eff[k], self._h[k],
-                          *self._damping[k], self._rut_damping[k], *self.leaders[k],
-                          *self._rut_ratio[k], constants[id(model), id(sp)])
+        set_wheel = self._loop.set_wheel
+        laws: dict[tuple[int, int], Any] = {}
+        for k, (model, sp) in enumerate(zip(self._models, rows, strict=True)):
+            law = laws.get((id(model), id(sp)))
+            if law is None:
+                # slipenv's models run their C law; a user's law is called back (its kernel).
+                hook = getattr(model, "kernel_constants", None)
+                law = hook(sp) if hook is not None else None
+                laws[id(model), id(sp)] = law = law if law is not None else self._kernels[k]
+            set_wheel(k, self.driven[k], self.spin_index[k], self._r_eff[k], self._h[k],
+                      *self._damping[k], self._rut_damping[k], *self.leaders[k],
+                      *self._rut_ratio[k], law, self._f_r)
 
     def soil_at_wheel(self, k: int) -> SoilParams:
         """The soil (floats) under wheel ``k`` at the last `sample_soil` (read-only)."""
@@ -421,118 +360,25 @@ class WheelSoilInjector:
         return c_long, c_lat * sigma / self.dt_s
 
     def _rolling_radius_m(self, soil_params: SoilParams, k: int) -> float:
-        if self.fixed_radius[k] is not None:  # a fitted model extension (slipenv diagnose)
-            return self.fixed_radius[k]
-        if bool(soil_params.deformable) and self.soil_radius[k] is not None:
-            return self.soil_radius[k]
+        fixed, on_soil = self.fixed_radius[k], self.soil_radius[k]
+        if fixed is not None:  # a fitted model extension (slipenv diagnose)
+            return fixed
+        if bool(soil_params.deformable) and on_soil is not None:
+            return on_soil
         return self.radius[k] * float(soil_params.rolling_radius_scale)
 
     # -- the substep -----------------------------------------------------------------------
     def apply(self) -> None:
         """Compute and apply the soil forces for the coming substep (the hot path).
 
-        Per loaded wheel: the contact frame, then for a driven wheel the slip relaxation step,
-        the force law and the two soil dampers, applied at the contact patch; for every wheel
-        the motion resistance, applied at the wheel centre (compaction resistance comes from
-        normal stresses that point at the axle, so it puts no moment on the wheel).
+        Runs the compiled loop (``_wheel_loop.c``; each instance binds the loop's own
+        ``apply`` over this method, so no Python frame runs per substep). Per loaded wheel: the
+        contact frame, then for a driven wheel the slip relaxation step, the force law and the
+        two soil dampers, applied at the contact patch; for every wheel the motion resistance,
+        applied at the wheel centre (compaction resistance comes from normal stresses that
+        point at the axle, so it puts no moment on the wheel).
         """
-        cid, bid, n = self.client, self.body_id, self.n
-        # Positional arguments throughout: PyBullet's keyword parsing costs ~0.1 µs per call.
-        # getContactPoints(bodyA, bodyB, linkIndexA=-2 (any), linkIndexB=-2, client);
-        # getLinkStates(body, links, computeLinkVelocity, computeForwardKinematics, client).
-        contacts = p.getContactPoints(bid, self.ground_id, -2, -2, cid)
-        links = p.getLinkStates(bid, self.links, 1, 0, cid)
-        joints = p.getJointStates(bid, self.spin_joints, cid)
-        load, patch = self._patches(contacts)
-        slip, tanb = self._s, self._b
-        fade_speed, low_speed = self.damping_speed_mps, self.low_speed_mps
-        stick, dt, rut, rut_vec = self.resistance_stick_m, self.dt_s, self._rut, self._rut_vec
-        fx_out, fy_out, res_out, damp_out = [0.0] * n, [0.0] * n, [0.0] * n, [0.0] * n
-        force_out = self._resistance_force_n
-        multi_pass = self.multi_pass
-        apply_force, world, sqrt = p.applyExternalForce, p.WORLD_FRAME, math.sqrt
-        zero3 = (0.0, 0.0, 0.0)
-        for k, link, driven, spin_index, r_eff, h, kernel, c_long, d_lat, rut_damping in (
-                self._wheel_rows):
-            w = load[k]
-            if w <= 0.0:
-                slip[k] = tanb[k] = rut[k] = 0.0
-                rut_vec[k] = force_out[k] = zero3
-                continue
-            ls = links[k]
-            # The contact frame and sliding velocity, in world coordinates (written out here: a
-            # helper function and its 11-tuple cost ~0.3 µs per wheel). Contact centre c = the
-            # load-weighted mean of the points; n = the normalised load-weighted normal; the axle
-            # is the link's y axis (the spin axis, invariant under spin); forward e = axle x n,
-            # left l = n x e. v_long is the wheel centre's velocity along e; v_lat (driven
-            # wheels) is the sliding of the contact point along l, v + ω x (c - centre), not of
-            # the wheel centre: this removes the chassis roll (rate x radius) that would
-            # otherwise feed back into the side force.
-            a = patch[k]
-            inv_w = 1.0 / w
-            cx, cy, cz = a[0] * inv_w, a[1] * inv_w, a[2] * inv_w
-            nx, ny, nz = a[3], a[4], a[5]
-            inv = 1.0 / sqrt(nx * nx + ny * ny + nz * nz)
-            nx, ny, nz = nx * inv, ny * inv, nz * inv
-            qx, qy, qz, qw = ls[1]
-            ax = 2.0 * (qx * qy - qw * qz)
-            ay = 1.0 - 2.0 * (qx * qx + qz * qz)
-            az = 2.0 * (qy * qz + qw * qx)
-            ex, ey, ez = ay * nz - az * ny, az * nx - ax * nz, ax * ny - ay * nx
-            inv = 1.0 / sqrt(ex * ex + ey * ey + ez * ez)
-            ex, ey, ez = ex * inv, ey * inv, ez * inv
-            lx, ly, lz = ny * ez - nz * ey, nz * ex - nx * ez, nx * ey - ny * ex
-            centre = ls[0]
-            px, py, pz = centre
-            vx, vy, vz = ls[6]
-            v_long = vx * ex + vy * ey + vz * ez
-            if driven:
-                wx, wy, wz = ls[7]
-                rx, ry, rz = cx - px, cy - py, cz - pz
-                v_lat = ((vx + wy * rz - wz * ry) * lx + (vy + wz * rx - wx * rz) * ly
-                         + (vz + wx * ry - wy * rx) * lz)
-                r_omega = r_eff * joints[spin_index][1]
-                t_old = tanb[k]
-                s, t, v_ref = relax_slip(slip[k], t_old, r_omega, v_long, v_lat, h)
-                slip[k], tanb[k] = s, t
-                f_long, f_lat, res = kernel(s, t, w)
-                fx_out[k], fy_out[k] = f_long, f_lat
-                d_y = lateral_soil_damping_n(t - t_old, v_ref, d_lat, fade_speed)
-                d_x = longitudinal_soil_damping_n(r_omega, v_long, v_ref, c_long, low_speed)
-                f_lat += d_y
-                f_long += d_x
-                # Shear (traction, side force) acts at the contact patch: the motor feels r F.
-                apply_force(bid, link,
-                            (f_long * ex + f_lat * lx, f_long * ey + f_lat * ly,
-                             f_long * ez + f_lat * lz), (cx, cy, cz), world, cid)
-                if multi_pass:
-                    res = self._multi_pass(k, res, w, v_long, load)
-                # Resistance along the heading, rate-independent (Coulomb-like).
-                r_k, u_k = rut_resistance_n(res, rut[k], v_long * dt, v_long, stick,
-                                            rut_damping)
-                rut[k] = u_k
-                damp_out[k] = abs(d_x) + abs(d_y) + abs(r_k - res * u_k)
-                res_out[k] = r_abs = abs(r_k)
-                force = (-r_k * ex, -r_k * ey, -r_k * ez)
-            else:
-                res = kernel(0.0, 0.0, w)[2]
-                if multi_pass:
-                    res = self._multi_pass(k, res, w, v_long, load)
-                # A swivel castor: resistance along its contact velocity (in the contact plane).
-                v_side = vx * lx + vy * ly + vz * lz
-                (rx, ry, rz), u = rut_resistance_vector_n(
-                    res, rut_vec[k], (v_long * ex + v_side * lx, v_long * ey + v_side * ly,
-                                      v_long * ez + v_side * lz), dt, stick, rut_damping)
-                rut_vec[k] = u
-                res_out[k] = r_abs = sqrt(rx * rx + ry * ry + rz * rz)
-                dx, dy, dz = rx - res * u[0], ry - res * u[1], rz - res * u[2]
-                damp_out[k] = sqrt(dx * dx + dy * dy + dz * dz)
-                force = (-rx, -ry, -rz)
-            force_out[k] = force
-            if r_abs != 0.0:
-                apply_force(bid, link, force, centre, world, cid)
-        self._load, self._fx, self._fy, self._res, self._damper = (load, fx_out, fy_out,
-                                                                   res_out, damp_out)
+        self._loop.apply()
 
     def _rut_load_ratios(self, k: int, soil_params: SoilParams) -> tuple[float, float]:
         """(forward, reverse): the load ratio of wheel ``k``'s leader's rut on its soil
@@ -555,54 +401,6 @@ class WheelSoilInjector:
         if geometry is None:
             return self.width[k], 2.0 * self.radius[k]
         return geometry.width_m, 2.0 * geometry.radius_m
-
-    def _multi_pass(self, k: int, res: float, load_n: float, v_long: float,
-                    loads: list[float]) -> float:
-        """Resistance of wheel ``k`` when it runs in the rut of the wheel ahead (`multi_pass`).
-
-        The leader is the wheel ahead in the direction of travel (sign of v_long); its rut, cut
-        on the soil now under wheel ``k``, is as deep as this wheel would sink under the load
-        q W_leader (`bekker.rut_load_ratio`; q = 1 for wheels alike), so the follower's
-        compaction is `bekker.rut_following_compaction_n` of its own law at its load and at
-        that load (the rolling term f_r W is kept whole)."""
-        way = 0 if v_long >= 0.0 else 1
-        leader = self.leaders[k][way]
-        if leader < 0 or loads[leader] <= 0.0:
-            return res
-        # The leader's rut depth as the load that sinks this wheel as deep (1.0 if alike).
-        f_r, w_lead = self._f_r, self._rut_ratio[k][way] * loads[leader]
-        lead = self._kernels[k](0.0, 0.0, w_lead)[2] - f_r * w_lead
-        rolling = f_r * load_n
-        return rolling + rut_following_compaction_n(res - rolling, lead)
-
-    def _patches(self, contacts: tuple) -> tuple[list[float], list[list[float] | None]]:
-        """Per wheel: the normal load W [N] and the load-weighted sums of its contact points and
-        normals ([Σf px, Σf py, Σf pz, Σf nx, Σf ny, Σf nz], or None off the ground)."""
-        load = [0.0] * self.n
-        patch: list[list[float] | None] = [None] * self.n
-        get_wheel = self.link_to_wheel.get
-        for cp in contacts:
-            f = cp[9]
-            if f <= 0.0:
-                continue
-            k = get_wheel(cp[3])
-            if k is None:
-                self._chassis_contact = True
-                continue
-            px, py, pz = cp[6]
-            nx, ny, nz = cp[7]
-            a = patch[k]
-            if a is None:
-                patch[k] = [f * px, f * py, f * pz, f * nx, f * ny, f * nz]
-            else:
-                a[0] += f * px
-                a[1] += f * py
-                a[2] += f * pz
-                a[3] += f * nx
-                a[4] += f * ny
-                a[5] += f * nz
-            load[k] += f
-        return load, patch
 
     # -- reading ---------------------------------------------------------------------------
     def contact_state(self) -> WheelContactState:

@@ -200,7 +200,7 @@ def _mound_centres(spec: TerrainSpec) -> np.ndarray:
     rng = np.random.default_rng(spec.layout_seed)
     half = _placement_half_side(spec)
     keep_out = spec.clear_radius_m + 2 * spec.mound_radius_m
-    centres = []
+    centres: list[np.ndarray] = []
     budget = MAX_DRAWS_PER_MOUND * spec.mound_count
     for _ in range(budget):
         if len(centres) == spec.mound_count:
@@ -256,8 +256,8 @@ def build_terrain(spec: TerrainSpec, client: int) -> Terrain:
         slope = math.radians(spec.slope_deg) if spec.kind == "slope" else 0.0
         az = math.radians(spec.downhill_azimuth_deg)
         # Tilt about the horizontal axis perpendicular to the downhill direction.
-        axis = (-math.sin(az), math.cos(az), 0.0)
-        quat = p.getQuaternionFromAxisAngle(axis, slope) if slope > 0 else (0, 0, 0, 1)
+        tilt_axis = (-math.sin(az), math.cos(az), 0.0)
+        quat = p.getQuaternionFromAxisAngle(tilt_axis, slope) if slope > 0 else (0, 0, 0, 1)
         body = p.createMultiBody(0, shape, baseOrientation=quat, physicsClientId=client)
         p.changeVisualShape(body, -1, rgbaColor=[0.6, 0.5, 0.35, 1], physicsClientId=client)
         heights = None

@@ -6,11 +6,12 @@ soil, presets
     `Soil` (validated, SI, sourced) and its numeric image `SoilParams`; the presets
     (Reina's lunar simulant and loose sand, Lindgren's field loam, Toyoura-like sand, concrete).
 janosi, lindgren, reina, bekker
-    Plain force laws, each citing its paper and equation: Janosi-Hanamoto shear and Okello's
+    Force laws, each citing its paper and equation: Janosi-Hanamoto shear and Okello's
     thrust curve (Lindgren Eq. 2-3, 18-24), the linear torque-slip law and the rolling-radius
     error (Lindgren Eq. 24-31), Reina's combined slip (Reina Eq. 5-12), Bekker sinkage and
-    compaction resistance. The laws the simulation injects (`janosi_forces`,
-    `linear_slip_forces`, `reina_forces`) are written once, in plain floats.
+    compaction resistance. The laws the simulation runs per wheel and substep are written
+    once, in C (``_laws.h``: the force laws, the slip state, the dampers, the motion
+    resistance, Bekker sinkage and multi-pass compaction), and bound by the Python API.
 vectorize
     Their array versions, derived generically from the scalar code (`array_law`,
     `forces_on_arrays`).
@@ -19,8 +20,9 @@ contact, models
     and the `ForceModel` contract with its three implementations; `wheel_kernel(model, soil)`
     is the per-wheel float kernel the simulation calls at every physics substep.
 slip_dynamics
-    Slip as a state: the relaxation-length step, the two soil dampers and the resistance ramp
-    (Pacejka §7.2.1; LuGre), plain float functions called by the simulation per wheel.
+    Slip as a state: the relaxation-length step, the two soil dampers and the rate-independent
+    motion resistance (Pacejka §7.2.1; LuGre; Dupont et al. 2002), float functions of one
+    wheel (the C laws of ``_laws.h``).
 soil_map
     Soils varying over the ground: `UniformSoil`, `PatchSoilMap`, `GridSoilMap`
     (regions: `Circle`, `Rectangle`, their `Union` and `Intersection`).

@@ -12,8 +12,9 @@ of pressing a rut of depth z per unit distance travelled, the compaction resista
 
 (standard Bekker theory; Wong, Theory of Ground Vehicles, Ch. 2 and 5). Both are power laws in
 the load, R_c = gamma W^e, which is how the force models evaluate them per physics substep.
-On non-deformable ground there is no rut and R_c = 0. All functions broadcast, except
-`rut_following_compaction_n` (plain floats, called per substep).
+On non-deformable ground there is no rut and R_c = 0. All functions broadcast, except the
+float ones the simulation calls per wheel (`wheel_sinkage_float_m`, `rut_following_compaction_n`,
+`rut_load_ratio`), whose one implementation is C (``_laws.h``, which the substep loop runs).
 
 Multi-pass (`rut_following_compaction_n`). Soil unloaded and reloaded follows a steep, nearly
 elastic line up to the maximum pressure it has already carried, and the virgin
@@ -31,10 +32,11 @@ are power laws with the same exponent, that is its own law at an equivalent load
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numpy.typing import ArrayLike
+
+import slipenv.terramechanics._laws as _laws
+from slipenv.terramechanics.vectorize import array_law
 
 __all__ = [
     "wheel_sinkage_m",
@@ -51,36 +53,33 @@ def _clamped_load(load_n: ArrayLike) -> np.ndarray:
     return np.maximum(np.asarray(load_n, dtype=float), 0.0)
 
 
-def wheel_sinkage_m(load_n: ArrayLike, width_m: ArrayLike, diameter_m: ArrayLike,
-                    k_c: ArrayLike, k_phi: ArrayLike, n_exp: ArrayLike) -> np.ndarray:
-    """Static sinkage z [m] of a rigid wheel (Bekker; Wong Ch. 5).
-
-    Parameters
-    ----------
-    load_n : array_like
-        Wheel load W [N]; negative loads count as 0.
-    width_m, diameter_m : array_like
-        Wheel width b and diameter D [m].
-    k_c, k_phi, n_exp : array_like
-        Bekker moduli k_c [N/m^(n+1)], k_phi [N/m^(n+2)] and exponent n (0 < n < 3).
-    """
-    n = np.asarray(n_exp, dtype=float)
-    k_eq_b = np.asarray(k_c) + np.asarray(width_m) * k_phi
-    base = 3.0 * _clamped_load(load_n) / ((3.0 - n) * k_eq_b * np.sqrt(diameter_m))
-    return base ** (2.0 / (2.0 * n + 1.0))
 
 
 def wheel_sinkage_float_m(load_n: float, width_m: float, diameter_m: float, k_c: float,
                           k_phi: float, n_exp: float) -> float:
-    """:func:`wheel_sinkage_m` for one wheel in Python floats (Bekker; Wong Ch. 5).
+    """Static sinkage z [m] of one rigid wheel (Bekker; Wong Ch. 5), in floats.
 
-    The same operations in the same order on floats instead of numpy values (``pow`` and
-    ``sqrt`` are the C library's in both), so the value is the same bit for bit, at a fraction
-    of the cost: the simulator and the rear camera evaluate it per wheel at every control step.
+    z = (3 W/((3 - n)(k_c + b k_phi) sqrt(D)))^(2/(2n+1)), negative loads counting as 0
+    (arguments as in `wheel_sinkage_m`, which is this function on arrays). The simulator and the
+    rear camera evaluate it per wheel at every control step.
     """
-    k_eq_b = k_c + width_m * k_phi
-    base = 3.0 * max(load_n, 0.0) / ((3.0 - n_exp) * k_eq_b * math.sqrt(diameter_m))
-    return base ** (2.0 / (2.0 * n_exp + 1.0))
+    return _laws.wheel_sinkage_m(load_n, width_m, diameter_m, k_c, k_phi, n_exp)
+
+
+wheel_sinkage_m = array_law(wheel_sinkage_float_m, name="wheel_sinkage_m", doc="""\
+Static sinkage z [m] of a rigid wheel (Bekker; Wong Ch. 5), on broadcast arrays.
+
+`wheel_sinkage_float_m` element by element: z = (3 W/((3 - n)(k_c + b k_phi) sqrt(D)))^(2/(2n+1)).
+
+Parameters
+----------
+load_n : array_like
+    Wheel load W [N]; negative loads count as 0.
+width_m, diameter_m : array_like
+    Wheel width b and diameter D [m].
+k_c, k_phi, n_exp : array_like
+    Bekker moduli k_c [N/m^(n+1)], k_phi [N/m^(n+2)] and exponent n (0 < n < 3).
+""")
 
 
 def track_sinkage_m(load_n: ArrayLike, width_m: ArrayLike, length_m: ArrayLike,
@@ -160,8 +159,7 @@ def rut_following_compaction_n(compaction_n: float, rut_compaction_n: float) -> 
     rut_compaction_n : float
         R_c at the rut's depth, i.e. of the same geometry under the leader's load [N].
     """
-    extra = compaction_n - rut_compaction_n
-    return extra if extra > 0.0 else 0.0
+    return _laws.rut_following_compaction_n(compaction_n, rut_compaction_n)
 
 
 def rut_load_ratio(width_m: float, diameter_m: float, leader_width_m: float,
@@ -176,7 +174,5 @@ def rut_load_ratio(width_m: float, diameter_m: float, leader_width_m: float,
     W_L, so q = alpha_L/alpha_f = k_eq,f sqrt(D_f)/(k_eq,L sqrt(D_L)), independent of n. Exactly
     1.0 for the same geometry.
     """
-    if width_m == leader_width_m and diameter_m == leader_diameter_m:
-        return 1.0
-    return ((k_c + width_m * k_phi) * diameter_m ** 0.5
-            / ((k_c + leader_width_m * k_phi) * leader_diameter_m ** 0.5))
+    return _laws.rut_load_ratio(width_m, diameter_m, leader_width_m, leader_diameter_m,
+                                k_c, k_phi)

@@ -1,12 +1,14 @@
 """Force models: the injection contract the simulation calls at every wheel contact.
 
-A force model is built once per wheel set with the wheels' `ContactGeometry`. Its one text of
-the physics is a per-wheel float kernel, ``model.scalar_kernel(soil)``:
-``(slip, tan_beta, load_n) -> (fx_n, fy_n, resistance_n)`` with the soil's constants bound once
-(the simulation builds one per wheel per control step and calls it every physics substep). The
-force laws themselves are plain float functions in `janosi`, `lindgren` and `reina`; the models
-add the contact geometry, Bekker compaction and rolling resistance (`bekker`); Reina's law is
-a net force and gets compaction only on request (`ReinaForceModel`).
+A force model is built once per wheel set with the wheels' `ContactGeometry`. Bound to one soil
+it is a per-wheel float kernel, ``model.scalar_kernel(soil)``:
+``(slip, tan_beta, load_n) -> (fx_n, fy_n, resistance_n)``. For slipenv's three models the
+binding is a `KernelConstants` (`kernel_constants`) and the kernel is the C law of
+``slipenv/terramechanics/_laws.h`` (``laws_kernel``), the one text the simulation's substep
+loop runs too; the models add the contact geometry, Bekker compaction and rolling resistance
+(`bekker`); Reina's law is a net force and gets compaction only on request
+(`ReinaForceModel`). A subclass that changes the law (its `kernel_constants` is None) keeps
+its own Python kernel, which the substep loop calls back.
 
 The array interface of the `ForceModel` protocol, ``model(slip, tan_beta, load_n, soil)`` and
 ``model.resistance_n(load_n, soil)`` on arrays of shape (n,) with a `SoilParams` of floats or
@@ -26,11 +28,9 @@ from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
+import slipenv.terramechanics._laws as _laws
 from slipenv.terramechanics.bekker import track_compaction_law, wheel_compaction_law
 from slipenv.terramechanics.contact import ContactGeometry
-from slipenv.terramechanics.janosi import janosi_forces
-from slipenv.terramechanics.lindgren import linear_slip_forces
-from slipenv.terramechanics.reina import reina_forces
 from slipenv.terramechanics.soil import SoilParams
 from slipenv.terramechanics.vectorize import Kernel, forces_on_arrays
 
@@ -83,8 +83,8 @@ def wheel_kernel(model: ForceModel, soil: SoilParams) -> Kernel:
 
 
 class KernelConstants(NamedTuple):
-    """A force model bound to one soil, as the compiled substep loop reads it
-    (``slipenv/sim/_wheel_loop.c``, ``Kernel``; field order is the C side's).
+    """A force model bound to one soil, as its C law reads it (``_laws.h``, ``LawsKernel``;
+    field order is the C side's).
 
     ``kind`` names the law (0 Janosi, 1 linear, 2 Reina); the fields a law does not use are 0.
     """
@@ -111,9 +111,8 @@ class KernelConstants(NamedTuple):
 class _PatchModel(ABC):
     """Kernel assembly, Bekker + rolling resistance and the derived array interface.
 
-    A subclass binds its force law (a plain float function of `janosi`, `lindgren` or `reina`)
-    to a soil's constants (`_forces`). Constructor arguments as documented on
-    `JanosiForceModel`.
+    A subclass binds its force law to a soil's constants (`_forces`, `kernel_constants`).
+    Constructor arguments as documented on `JanosiForceModel`.
     """
 
     def __init__(self, geometry: ContactGeometry, rolling_resistance_coeff: float = 0.01,
@@ -157,14 +156,14 @@ class _PatchModel(ABC):
                                                    soil.k_phi, soil.n_exp, soil.deformable)
         return float(gamma), float(exponent)
 
-    # The compiled substep loop's name for the class's force law (`kernel_constants`).
+    # The C law's name for the class's force law (`kernel_constants`, ``_laws.h``).
     _COMPILED_KIND: int | None = None
 
     def kernel_constants(self, soil: SoilParams) -> KernelConstants | None:
-        """The constants `scalar_kernel` binds, for the compiled substep loop: what
-        ``slipenv/sim/_wheel_loop.c`` evaluates with the same arithmetic as this class's plain
-        float law (tested bit for bit). None for a subclass that changes the law: the compiled
-        loop only knows slipenv's own classes."""
+        """This model bound to `soil`, as the C law (``_laws.h``, ``laws_kernel``) reads it.
+
+        None for a subclass, which may change the law: it keeps its own Python kernel
+        (`_forces`), which the substep loop calls back."""
         if self._COMPILED_KIND is None or type(self) not in _COMPILED_MODELS:
             return None
         ac, tan_phi, ratio = self._patch_constants(soil)
@@ -179,17 +178,21 @@ class _PatchModel(ABC):
         The force law of the class with `soil`'s constants bound once; the resistance is
         gamma W^e + f_r W (Bekker compaction, zero on rigid ground, plus rolling). ``soil``
         must have float fields; the kernel expects ``load_n`` > 0 (the array interface
-        clamps loads at 0: no contact, no force).
+        clamps loads at 0: no contact, no force). For slipenv's classes this is the C law
+        bound to `kernel_constants` (``_laws.Kernel``); a subclass gets its `_forces` plus
+        the same resistance.
         """
+        constants = self.kernel_constants(soil)
+        if constants is not None:
+            law: Kernel = _laws.Kernel(constants)
+            return law
         gamma, exponent = self._compaction(soil)
         forces, f_r = self._forces(soil), self.rolling_resistance_coeff
+        resistance = _laws.motion_resistance_n
 
         def kernel(slip: float, tan_beta: float, load_n: float) -> tuple[float, float, float]:
             fx, fy = forces(slip, tan_beta, load_n)
-            res = f_r * load_n
-            if gamma:
-                res += gamma * load_n ** exponent
-            return fx, fy, res
+            return fx, fy, resistance(load_n, f_r, gamma, exponent)
         return kernel
 
     def __call__(self, slip: np.ndarray, tan_beta: np.ndarray, load_n: np.ndarray,
@@ -268,14 +271,10 @@ class JanosiForceModel(_PatchModel):
 
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
         ac, tan_phi, ratio = self._patch_constants(soil)
-        kappa = self.lateral_stiffness_ratio
-        if kappa != 1.0:
-            def anisotropic(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
-                return janosi_forces(slip, tan_beta, load_n, ac, tan_phi, ratio, kappa)
-            return anisotropic
+        kappa, law = self.lateral_stiffness_ratio, _laws.janosi_forces
 
         def forces(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
-            return janosi_forces(slip, tan_beta, load_n, ac, tan_phi, ratio)
+            return law(slip, tan_beta, load_n, ac, tan_phi, ratio, kappa)
         return forces
 
 
@@ -297,15 +296,11 @@ class LinearSlipForceModel(_PatchModel):
 
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
         ac, tan_phi, ratio = self._patch_constants(soil)
-
-        kappa = self.lateral_stiffness_ratio
-        if kappa != 1.0:  # lateral anisotropy as in `JanosiForceModel`: tan_beta -> kappa tan_beta
-            def anisotropic(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
-                return linear_slip_forces(slip, kappa * tan_beta, load_n, ac, tan_phi, ratio)
-            return anisotropic
+        # lateral anisotropy as in `JanosiForceModel`: tan_beta -> kappa tan_beta
+        kappa, law = self.lateral_stiffness_ratio, _laws.linear_slip_forces
 
         def forces(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
-            return linear_slip_forces(slip, tan_beta, load_n, ac, tan_phi, ratio)
+            return law(slip, tan_beta, load_n, ac, tan_phi, ratio, kappa)
         return forces
 
 
@@ -379,13 +374,14 @@ class ReinaForceModel(_PatchModel):
 
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
         mu, c_x, c_y, a_x, a_y = self._reina_constants(soil)
+        law = _laws.reina_forces
         if not self.scale_stiffness_with_load:
             def verbatim(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
-                return reina_forces(slip, tan_beta, load_n, mu, c_x, c_y, a_x, a_y)
+                return law(slip, tan_beta, load_n, mu, c_x, c_y, a_x, a_y)
             return verbatim
 
         def scaled(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
-            fx, fy = reina_forces(slip, tan_beta, 1.0, mu, c_x, c_y, a_x, a_y)
+            fx, fy = law(slip, tan_beta, 1.0, mu, c_x, c_y, a_x, a_y)
             return fx * load_n, fy * load_n
         return scaled
 
@@ -396,20 +392,18 @@ class ReinaForceModel(_PatchModel):
     def scalar_kernel(self, soil: SoilParams) -> Kernel:
         """As `_PatchModel.scalar_kernel`; with ``compaction`` the thrust is the gross one."""
         kernel = super().scalar_kernel(soil)
-        if not self.compaction:
+        if not self.compaction or isinstance(kernel, _laws.Kernel):
             return kernel
         gamma, exponent = self._compaction(soil)
         mu, c_x = float(soil.mu), float(soil.c_x_n)
+        # y = C_x sigma/(mu W); with load scaling C_x = c_x W/W_ref, so W cancels.
         w_ref = float(soil.reference_load_n) if self.scale_stiffness_with_load else None
+        extra = _laws.reina_gross_extra_n
 
         def gross(slip: float, tan_beta: float, load_n: float) -> tuple[float, float, float]:
             fx, fy, res = kernel(slip, tan_beta, load_n)
-            sigma = math.hypot(slip, tan_beta)
-            if sigma > 0.0 and gamma:
-                # y = C_x sigma/(mu W); with load scaling C_x = c_x W/W_ref, so W cancels.
-                y = c_x * sigma / (mu * (w_ref if w_ref is not None else load_n))
-                fx += gamma * load_n ** exponent * -math.expm1(-y) * slip / sigma
-            return fx, fy, res
+            w_y = w_ref if w_ref is not None else load_n
+            return fx + extra(slip, tan_beta, load_n, gamma, exponent, c_x, mu, w_y), fy, res
         return gross
 
     def __repr__(self) -> str:
@@ -418,7 +412,7 @@ class ReinaForceModel(_PatchModel):
                 f"compaction={self.compaction!r})")
 
 
-# The classes whose laws the compiled loop transcribes (a subclass may change the law).
+# The classes whose law is the C one of `kernel_constants` (a subclass may change the law).
 _COMPILED_MODELS = (JanosiForceModel, LinearSlipForceModel)
 
 FORCE_MODELS: Mapping[str, Callable[..., ForceModel]] = MappingProxyType({

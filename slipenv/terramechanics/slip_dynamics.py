@@ -1,7 +1,9 @@
 """Slip as a state: relaxation length and step, soil dampers, and the rut (Coulomb) resistance.
 
-Plain float functions the simulation calls per wheel and per physics substep (convention of
-`contact`: s > 0 drives, tan_beta = v_lat/|v_long|, forces in the wheel's heading frame).
+Float functions of one wheel (convention of `contact`: s > 0 drives, tan_beta = v_lat/|v_long|,
+forces in the wheel's heading frame). Each law is written once, in C
+(``slipenv/terramechanics/_laws.h``), the text the simulation's substep loop runs; the functions
+here call it, and their docstrings give the sources and the equations.
 
 Relaxation (Pacejka, Tyre and Vehicle Dynamics, 3rd ed., §7.2.1). The slip ratio and the slip
 angle are states with a relaxation length sigma [m],
@@ -50,6 +52,8 @@ from __future__ import annotations
 
 import math
 
+import slipenv.terramechanics._laws as _laws
+
 __all__ = [
     "contact_relaxation_length_m",
     "critical_damping_ns_per_m",
@@ -87,13 +91,8 @@ def relax_slip(slip: float, tan_beta: float, rim_speed_mps: float, long_speed_mp
     reference_speed_mps : float
         V = max(|r omega|, |v|, |v_lat|) [m/s], the speed the dampers fade with.
     """
-    v_ref = max(abs(rim_speed_mps), abs(long_speed_mps), abs(lat_speed_mps))
-    leak = 1.0 + step_per_length * v_ref
-    s = (slip + step_per_length * (rim_speed_mps - long_speed_mps)) / leak
-    t = (tan_beta + step_per_length * lat_speed_mps) / leak
-    s = 1.0 if s > 1.0 else (-1.0 if s < -1.0 else s)
-    t = 1.0 if t > 1.0 else (-1.0 if t < -1.0 else t)
-    return s, t, v_ref
+    return _laws.relax_slip(slip, tan_beta, rim_speed_mps, long_speed_mps, lat_speed_mps,
+                            step_per_length)
 
 
 def critical_damping_ns_per_m(slip_stiffness_n: float, relaxation_m: float, mass_kg: float,
@@ -118,8 +117,8 @@ def critical_damping_ns_per_m(slip_stiffness_n: float, relaxation_m: float, mass
     max_ns_per_m : float
         Cap on c [N s/m].
     """
-    c = 2.0 * damping_ratio * math.sqrt(slip_stiffness_n / relaxation_m * mass_kg)
-    return c if c < max_ns_per_m else max_ns_per_m
+    return _laws.critical_damping_ns_per_m(slip_stiffness_n, relaxation_m, mass_kg,
+                                           damping_ratio, max_ns_per_m)
 
 
 def lateral_soil_damping_n(tan_beta_change: float, reference_speed_mps: float,
@@ -144,9 +143,8 @@ def lateral_soil_damping_n(tan_beta_change: float, reference_speed_mps: float,
     fade_speed_mps : float
         v_f [m/s], > 0.
     """
-    fade = reference_speed_mps / fade_speed_mps
-    fade *= fade
-    return -damping_n * tan_beta_change / (1.0 + fade * fade)
+    return _laws.lateral_soil_damping_n(tan_beta_change, reference_speed_mps, damping_n,
+                                        fade_speed_mps)
 
 
 def longitudinal_soil_damping_n(rim_speed_mps: float, long_speed_mps: float,
@@ -171,10 +169,8 @@ def longitudinal_soil_damping_n(rim_speed_mps: float, long_speed_mps: float,
     low_speed_mps : float
         v_low [m/s], > 0.
     """
-    speed = reference_speed_mps / low_speed_mps
-    if speed < 1.0:
-        return (1.0 - speed) * damping_ns_per_m * (rim_speed_mps - long_speed_mps)
-    return 0.0
+    return _laws.longitudinal_soil_damping_n(rim_speed_mps, long_speed_mps, reference_speed_mps,
+                                             damping_ns_per_m, low_speed_mps)
 
 
 def resistance_along_travel_n(resistance_n: float, long_speed_mps: float,
@@ -254,11 +250,8 @@ def rut_resistance_n(resistance_n: float, state: float, displacement_m: float,
     state : float
         u' [-].
     """
-    u = state + displacement_m / stick_m
-    u = 1.0 if u > 1.0 else (-1.0 if u < -1.0 else u)
-    r = resistance_n * u + damping_ns_per_m * speed_mps
-    r = resistance_n if r > resistance_n else (-resistance_n if r < -resistance_n else r)
-    return r, u
+    return _laws.rut_resistance_n(resistance_n, state, displacement_m, speed_mps, stick_m,
+                                  damping_ns_per_m)
 
 
 def rut_resistance_vector_n(resistance_n: float, state: tuple[float, float, float],
@@ -292,17 +285,5 @@ def rut_resistance_vector_n(resistance_n: float, state: tuple[float, float, floa
     state : tuple of 3 floats
         u'.
     """
-    vx, vy, vz = velocity_mps
-    h = dt_s / stick_m
-    ux, uy, uz = state[0] + h * vx, state[1] + h * vy, state[2] + h * vz
-    norm = math.sqrt(ux * ux + uy * uy + uz * uz)
-    if norm > 1.0:
-        ux, uy, uz = ux / norm, uy / norm, uz / norm
-    rx = resistance_n * ux + damping_ns_per_m * vx
-    ry = resistance_n * uy + damping_ns_per_m * vy
-    rz = resistance_n * uz + damping_ns_per_m * vz
-    norm = math.sqrt(rx * rx + ry * ry + rz * rz)
-    if norm > resistance_n:
-        scale = resistance_n / norm
-        rx, ry, rz = rx * scale, ry * scale, rz * scale
-    return (rx, ry, rz), (ux, uy, uz)
+    return _laws.rut_resistance_vector_n(resistance_n, state, velocity_mps, dt_s, stick_m,
+                                         damping_ns_per_m)

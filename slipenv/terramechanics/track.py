@@ -1,8 +1,10 @@
 """A skid-steer track on deformable soil: the Wong-Chiang shear field and its companions.
 
 Plain functions of (state, kinematics, soil) for one track, or for the two tracks of a vehicle
-at once (arrays of shape (n_tracks, n_cells)). The simulator (``slipenv.sim.track_soil``) calls
-them once per physics substep; the tests check them against the closed forms.
+at once (arrays of shape (n_tracks, n_cells)). They are the model's only text: the simulator
+(``slipenv.sim.track_soil``) composes them once per physics substep, and the tests check them
+against the closed forms. The fields are small, so the cost is numpy's per-call overhead: the
+functions update their states in place and keep the number of array operations low.
 
 Frame: the hull frame projected on the ground, x forward, y left, origin at the hull reference
 point; a track at lateral offset y_i, contact -L/2 <= x <= L/2, width b. The belt moves
@@ -19,22 +21,25 @@ Shear displacement (Wong & Chiang 2001, Proc. IMechE D 215:343-355; Wong, *Theor
     (:func:`steady_shear_displacement` integrates it exactly). `advance_shear` solves it with
     first-order upwinding on cell faces, the source at cell centres (midpoint rule).
 Shear stress (Janosi & Hanamoto; Wong Eq. 2.56) with Mohr-Coulomb strength (Wong Eq. 2.54):
-    tau = (c + p tan phi)(1 - exp(-|j|/K)), directed against the local sliding velocity
+    tau = (c + p tan phi)(1 - exp(-|j|/K)) (`cell_forces`), directed against the local sliding
+    velocity
     (Wong & Chiang's choice). The direction is carried by a short "bristle" state e per belt
     element, de/dt = v_j - |v_j| e/e_max (the LuGre / brush-model form, Canudas de Wit et al.
     1995): in sliding it aligns with v_j within a sliding distance of a few e_max, so the
     steady forces are Wong-Chiang's (tested within 5 %); at rest it is an elastic spring. A
     stress that jumped with the sign of v_j would be an infinitely stiff damper, which an
     explicit step at 240 Hz cannot integrate (the vehicle chatters and ratchets downhill).
+    At rest the soil springs get Kelvin-Voigt dampers on each cell's displacement rate
+    (`soil_damper_forces`; LuGre's sigma_1 term), zero in any steady motion.
 Normal pressure: the road-wheel loads, spread piecewise-linearly over the cells
     (`load_spread_matrix`, hat functions that conserve the load exactly).
-Sinkage (Bekker's pressure-sinkage law, Wong Ch. 2): z0 = (p/(k_c/b + k_phi))^(1/n) per cell,
-    times Lyasko's slip-sinkage factor (1 + i)/(1 - 0.5 i) (Lyasko, J. Terramech. 47 (2010)
-    21-31).
+Sinkage (Bekker's pressure-sinkage law, Wong Ch. 2): z0 = (p/(k_c/b + k_phi))^(1/n) per cell
+    (`bekker_sinkage_m`), times Lyasko's slip-sinkage factor (1 + i)/(1 - 0.5 i)
+    (`slip_sinkage_factor`; Lyasko, J. Terramech. 47 (2010) 21-31).
 Compaction resistance (Bekker; Wong Ch. 2 and 5): R_c = b (k_c/b + k_phi) z^(n+1)/(n+1) per
-    track, acting only while the track advances into soil it has not yet cut (a rut *state*:
-    `rut_resistance_n`): rate independent, zero in its own rut, so a stalled track does not
-    creep.
+    track (`compaction_resistance_n` of its deepest cell), acting only while the
+    track advances into soil it has not yet cut (a rut *state*: `rut_resistance_n`): rate
+    independent, zero in its own rut, so a stalled track does not creep.
 Side-wall (bulldozing) resistance: Rankine passive earth pressure on the track's side wall of
     height h, P = 1/2 gamma h^2 N_phi + 2 c h sqrt(N_phi), N_phi = tan^2(45 deg + phi/2) (Wong
     Ch. 2, "passive earth pressure"; Bekker's bulldozing resistance is the same Rankine
@@ -58,14 +63,18 @@ import numpy as np
 
 __all__ = [
     "DIRECTION_SPEED_MPS",
+    "UPWIND_SPEED_MPS",
+    "GROUND_SPEED_MPS",
     "load_spread_matrix",
+    "sliding_velocity",
+    "shear_strength_pa",
     "janosi_stress_pa",
     "shear_direction",
-    "direction_of_stress",
     "advance_shear",
     "steady_shear_displacement",
     "steady_track_forces",
     "cell_forces",
+    "soil_damper_forces",
     "bekker_sinkage_m",
     "slip_sinkage_factor",
     "compaction_resistance_n",
@@ -79,6 +88,16 @@ __all__ = [
 DIRECTION_SPEED_MPS = 2e-3
 """[m/s] Below this sliding speed the stress direction blends from -v_j to -j (at rest the soil
 is a spring along its displacement; the sliding direction is undefined)."""
+
+UPWIND_SPEED_MPS = 1e-3
+"""[m/s] Belt speeds below this are "at rest" for the shear field: no advection, every face
+integrates its neighbouring cells' source (the soil spring)."""
+
+GROUND_SPEED_MPS = 1e-4
+"""[m/s] Ground speeds below this leave the side walls and berms where they are."""
+
+_TINY = 1e-300  # guards the unit vectors of a zero displacement or stress
+_ROTATE = np.array([1.0, -1.0]).reshape(2, 1, 1)  # (x, y) components of Omega z x (y, x)
 
 
 # -- normal pressure -------------------------------------------------------------------------
@@ -100,19 +119,42 @@ def load_spread_matrix(wheel_x_m: np.ndarray, cell_x_m: np.ndarray) -> np.ndarra
         col = np.interp(xc, xs, unit)  # flat beyond the end wheels
         total = col.sum()
         m[:, k] = col / total if total > 0.0 else 0.0
-    # Cells beyond the outer wheels get the end wheels' hats (np.interp holds end values).
     return m
 
 
 # -- shear ---------------------------------------------------------------------------------
-def janosi_stress_pa(j_abs_m, pressure_pa, cohesion_pa: float, tan_phi: float,
-                     shear_modulus_m: float):
-    """Janosi-Hanamoto stress tau = (c + p tan phi)(1 - e^{-j/K}) [Pa] (Wong Eq. 2.56, 2.54).
+def sliding_velocity(track_speed_mps, belt_speed_mps, lateral_speed_mps, yaw_rate_rad_s: float,
+                     x_cell_m: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """Sliding velocity of the belt over the ground at the cell centres [m/s], (2, n_tracks,
+    n_cells): v_j = (V_x,i - u_i, V_y,i + Omega x) (Wong & Chiang 2001; Wong Ch. 7).
 
-    Broadcasts over arrays of |j| [m] and pressure p [Pa].
+    ``track_speed_mps`` V_x,i = V_x - Omega y_i (the ground speed of track i's centre line
+    along the hull's x), ``belt_speed_mps`` u_i, ``lateral_speed_mps`` V_y,i (the hull's
+    lateral speed at the track's height), each of length n_tracks; ``x_cell_m`` (n_tracks,
+    n_cells) the cell centres. Written into ``out`` when given.
     """
-    return (cohesion_pa + pressure_pa * tan_phi) * (1.0 - np.exp(-np.asarray(j_abs_m)
-                                                                 / shear_modulus_m))
+    if out is None:
+        out = np.empty((2,) + np.shape(x_cell_m))
+    out[0] = np.subtract(track_speed_mps, belt_speed_mps)[:, None]
+    np.multiply(x_cell_m, yaw_rate_rad_s, out=out[1])
+    out[1] += np.asarray(lateral_speed_mps, dtype=float)[:, None]
+    return out
+
+
+def shear_strength_pa(pressure_pa, cohesion_pa, tan_phi):
+    """Mohr-Coulomb shear strength tau_max = c + p tan phi [Pa] (Wong Eq. 2.54). Broadcasts."""
+    strength = pressure_pa * tan_phi
+    strength += cohesion_pa
+    return strength
+
+
+def janosi_stress_pa(j_abs_m, strength_pa, shear_modulus_m):
+    """Janosi-Hanamoto shear stress tau = tau_max (1 - e^{-|j|/K}) [Pa] (Wong Eq. 2.56), of
+    the shear displacement's magnitude |j| [m] and the strength tau_max
+    (`shear_strength_pa`). Broadcasts."""
+    tau = np.expm1(j_abs_m * (-1.0 / shear_modulus_m))  # -(1 - e^{-|j|/K})
+    tau *= strength_pa
+    return -tau
 
 
 def shear_direction(vx, vy, jx, jy, v_reg: float = DIRECTION_SPEED_MPS):
@@ -121,104 +163,102 @@ def shear_direction(vx, vy, jx, jy, v_reg: float = DIRECTION_SPEED_MPS):
     (dx, dy) is the sliding velocity's direction v_j/|v_j| (Wong & Chiang) for |v_j| >= v_reg;
     below, the sliding velocity's weight |v_j|/v_reg blends it with the displacement's direction
     j/|j| (at rest the soil acts as a spring along its displacement). Zero where both vanish.
+    This is the steady law of :func:`steady_track_forces`; the simulation carries the direction
+    as a state instead (:func:`advance_shear`, :func:`cell_forces`).
     """
     vx, vy, jx, jy = (np.asarray(a, dtype=float) for a in (vx, vy, jx, jy))
     speed = np.hypot(vx, vy)
     jn = np.hypot(jx, jy)
     w = np.minimum(speed / v_reg, 1.0)
-    inv_j = np.where(jn > 0.0, 1.0 / np.maximum(jn, 1e-300), 0.0)
+    inv_j = np.where(jn > 0.0, 1.0 / np.maximum(jn, _TINY), 0.0)
     # v/v_reg has length w; the displacement part has length (1 - w).
-    dx = vx / v_reg * (speed < v_reg) + vx / np.maximum(speed, 1e-300) * (speed >= v_reg) \
-        + (1.0 - w) * jx * inv_j
-    dy = vy / v_reg * (speed < v_reg) + vy / np.maximum(speed, 1e-300) * (speed >= v_reg) \
-        + (1.0 - w) * jy * inv_j
+    inv_v = np.where(speed < v_reg, 1.0 / v_reg, 1.0 / np.maximum(speed, _TINY))
+    dx = vx * inv_v + (1.0 - w) * jx * inv_j
+    dy = vy * inv_v + (1.0 - w) * jy * inv_j
     norm = np.hypot(dx, dy)
-    inv = np.where(norm > 0.0, 1.0 / np.maximum(norm, 1e-300), 0.0)
+    inv = np.where(norm > 0.0, 1.0 / np.maximum(norm, _TINY), 0.0)
     return dx * inv, dy * inv
 
 
-def _upwind(field: np.ndarray, forward: np.ndarray, backward: np.ndarray) -> np.ndarray:
-    """The upstream neighbour of every entry along the last axis (0 beyond the entry end):
-    the previous entry where ``forward``, the next where ``backward``, itself elsewhere.
-    ``forward``/``backward`` are boolean masks broadcasting over the leading axes."""
-    zero = np.zeros(field.shape[:-1] + (1,))
-    prev = np.concatenate((zero, field[..., :-1]), axis=-1)
-    nxt = np.concatenate((field[..., 1:], zero), axis=-1)
-    return np.where(forward, prev, np.where(backward, nxt, field))
-
-
-def advance_shear(j: np.ndarray, v_cell: np.ndarray, belt_speed_mps: np.ndarray,
+def advance_shear(j: np.ndarray, e: np.ndarray, v_cell: np.ndarray, belt_speed_mps,
                   yaw_rate_rad_s: float, dx_m: float, dt_s: float,
-                  e: np.ndarray | None = None, direction_length_m=1e-3) -> np.ndarray:
-    """One explicit step of dj/dt - u dj/dx = v_j - Omega z x j on cell faces (in place).
+                  direction_length_m) -> None:
+    """One explicit step of dj/dt - u dj/dx = v_j - Omega z x j on cell faces, and of the
+    stress-direction state e (in place).
 
     Parameters
     ----------
     j : ndarray, shape (2, n_tracks, n_cells + 1)
         Shear displacement (x, y components) [m] at the faces, face 0 at the front (x = L/2),
         face n at the rear.
+    e : ndarray, shape (2, n_tracks, n_cells)
+        The stress-direction state [m] at the cell centres (the stress is -tau e/|e|,
+        :func:`cell_forces`), advected the same way with the source v_j - |v_j| e / e_max -
+        Omega z x e (the relaxation implicit): it turns to a new sliding direction within a
+        sliding distance of a few e_max, and at rest it is an elastic spring.
     v_cell : ndarray, shape (2, n_tracks, n_cells)
-        Sliding velocity of the belt over the ground at the cell centres [m/s].
-    belt_speed_mps : ndarray, shape (n_tracks,)
+        Sliding velocity of the belt over the ground at the cell centres [m/s]
+        (:func:`sliding_velocity`).
+    belt_speed_mps : sequence of float, length n_tracks
         u_i: belt speed along the ground run, > 0 when it moves rearwards (forward drive).
     yaw_rate_rad_s : float
         Omega [rad/s] (the rotation term keeps j in the ground frame while stored in hull axes;
         it produces Wong-Chiang's cos/sin terms).
     dx_m, dt_s : float
         Cell length [m] and time step [s] (|u| dt/dx < 1 for stability).
-    e : ndarray, shape (2, n_tracks, n_cells), optional
-        The stress-direction state [m] at the cell centres (see `direction_of_stress`),
-        advected the same way with the source v_j - |v_j| e / e_max - Omega z x e (implicit in
-        the relaxation).
     direction_length_m : float or ndarray (n_tracks, 1)
-        e_max [m], the sliding distance over which the stress direction turns to a new sliding
-        direction.
+        e_max [m], the sliding distance over which the stress direction turns.
 
-    Returns j. Upwinding: for u > 0 the front face is the entry (j = 0) and face f takes the
-    flux from face f-1 with the source of the cell between them (midpoint rule: exact for the
-    linear v_j of a rigid hull); for u < 0 mirrored; at |u| below 1 mm/s every face
-    integrates the mean source of its neighbouring cells (the soil spring).
+    Upwinding: for u > 0 the front face is the entry (j = 0) and face f takes the flux from
+    face f-1 with the source of the cell between them (midpoint rule: exact for the linear v_j
+    of a rigid hull); for u < 0 mirrored; at |u| below ``UPWIND_SPEED_MPS`` every face
+    integrates the mean source of its neighbouring cells.
     """
-    u = np.asarray(belt_speed_mps, dtype=float)[:, None]
-    fwd, bwd = u > 1e-3, u < -1e-3
-    a = np.abs(u) * (dt_s / dx_m)
-    src = v_cell.copy()
-    src[0] += yaw_rate_rad_s * 0.5 * (j[1, :, :-1] + j[1, :, 1:])
-    src[1] -= yaw_rate_rad_s * 0.5 * (j[0, :, :-1] + j[0, :, 1:])
-    if fwd.all():  # the common case, without masks (same arithmetic)
-        j[..., 1:] += a * (j[..., :-1] - j[..., 1:]) + dt_s * src
+    u = [float(ui) for ui in belt_speed_mps]
+    courant = dt_s / dx_m
+    # Sources, times dt: v_j plus the rotation of j (face means at the cells) and of e.
+    dv = dt_s * v_cell
+    src = (0.5 * yaw_rate_rad_s * dt_s * _ROTATE) * (j[..., :-1] + j[..., 1:])[::-1]
+    src += dv
+    e_src = (yaw_rate_rad_s * dt_s * _ROTATE) * e[::-1]
+    e_src += dv
+    if all(ui > UPWIND_SPEED_MPS for ui in u):  # both belts forward: the common case at once
+        a = np.array([ui * courant for ui in u])[:, None]
+        src += a * (j[..., :-1] - j[..., 1:])
+        j[..., 1:] += src
         j[..., 0] = 0.0
+        e_src -= a * e
+        e_src[..., 1:] += a * e[..., :-1]
+        e += e_src
     else:
-        zero = np.zeros(src.shape[:-1] + (1,))
-        face_src = np.where(fwd, np.concatenate((zero, src), axis=-1),
-                            np.where(bwd, np.concatenate((src, zero), axis=-1),
-                                     np.concatenate((src[..., :1], 0.5 * (src[..., :-1]
-                                                                          + src[..., 1:]),
-                                                     src[..., -1:]), axis=-1)))
-        j += a * (_upwind(j, fwd, bwd) - j) + dt_s * face_src
-        j[..., 0] *= ~fwd[:, 0]
-        j[..., -1] *= ~bwd[:, 0]
-    if e is not None:
-        leak = 1.0 + (dt_s / direction_length_m) * np.sqrt(v_cell[0] ** 2 + v_cell[1] ** 2)
-        e_src = v_cell.copy()
-        e_src[0] += yaw_rate_rad_s * e[1]
-        e_src[1] -= yaw_rate_rad_s * e[0]
-        if fwd.all():
-            e_src[..., 1:] += a * (e[..., :-1] - e[..., 1:]) * (1.0 / dt_s)
-            e_src[..., 0] -= a[:, 0] * e[..., 0] * (1.0 / dt_s)
-            e += dt_s * e_src
-        else:
-            e += a * (_upwind(e, fwd, bwd) - e) + dt_s * e_src
-        e /= leak
-    return j
+        for i, ui in enumerate(u):
+            _upwind_track(j[:, i], e[:, i], src[:, i], e_src[:, i], ui, abs(ui) * courant)
+    leak = np.hypot(v_cell[0], v_cell[1])
+    leak *= dt_s / direction_length_m
+    leak += 1.0
+    e /= leak
 
 
-def direction_of_stress(ex, ey):
-    """Unit vector of the direction state e, (0, 0) where e = 0 (the stress is -tau e/|e|)."""
-    ex, ey = np.asarray(ex, dtype=float), np.asarray(ey, dtype=float)
-    n = np.hypot(ex, ey)
-    inv = np.where(n > 0.0, 1.0 / np.maximum(n, 1e-300), 0.0)
-    return ex * inv, ey * inv
+def _upwind_track(j: np.ndarray, e: np.ndarray, src: np.ndarray, e_src: np.ndarray,
+                  u: float, a: float) -> None:
+    """:func:`advance_shear`'s step for one track (in place, before the relaxation): ``j`` (2,
+    n_cells + 1) at the faces, ``e`` (2, n_cells) at the centres, ``src``/``e_src`` their
+    sources times dt at the centres, ``a`` = |u| dt/dx."""
+    if u > UPWIND_SPEED_MPS:
+        j[:, 1:] += a * (j[:, :-1] - j[:, 1:]) + src
+        j[:, 0] = 0.0
+        e[:, 1:] += a * (e[:, :-1] - e[:, 1:]) + e_src[:, 1:]
+        e[:, 0] += e_src[:, 0] - a * e[:, 0]
+    elif u < -UPWIND_SPEED_MPS:
+        j[:, :-1] += a * (j[:, 1:] - j[:, :-1]) + src
+        j[:, -1] = 0.0
+        e[:, :-1] += a * (e[:, 1:] - e[:, :-1]) + e_src[:, :-1]
+        e[:, -1] += e_src[:, -1] - a * e[:, -1]
+    else:  # at rest: each face integrates the mean source of its neighbouring cells
+        j[:, 0] += src[:, 0]
+        j[:, 1:-1] += 0.5 * (src[:, :-1] + src[:, 1:])
+        j[:, -1] += src[:, -1]
+        e += e_src
 
 
 def steady_shear_displacement(x_m: np.ndarray, vx: float, vy: float, yaw_rate: float,
@@ -262,8 +302,8 @@ def steady_track_forces(vx: float, vy: float, yaw_rate: float, y_track_m: float,
     vxs = np.full_like(x, vx - yaw_rate * y_track_m - belt_speed_mps)
     vys = vy + yaw_rate * x
     dxn, dyn = shear_direction(vxs, vys, jx, jy)
-    tau = janosi_stress_pa(np.hypot(jx, jy), pressure_pa, cohesion_pa, tan_phi,
-                           shear_modulus_m)
+    strength = shear_strength_pa(pressure_pa, cohesion_pa, tan_phi)
+    tau = janosi_stress_pa(np.hypot(jx, jy), strength, shear_modulus_m)
     tx, ty = -tau * dxn, -tau * dyn
     h = length_m / (n_quad - 1)
     trap = lambda f: float(h * (f.sum() - 0.5 * (f[0] + f[-1])))  # noqa: E731
@@ -272,41 +312,81 @@ def steady_track_forces(vx: float, vy: float, yaw_rate: float, y_track_m: float,
 
 
 def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m, dx_m: float,
-                cohesion_pa, tan_phi, shear_modulus_m) -> np.ndarray:
-    """Shear force of each cell on the track, shape (2, n_tracks, n_cells) [N].
+                cohesion_pa, tan_phi, shear_modulus_m,
+                out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Shear force of each cell on the track and its tangent stiffness.
 
-    A cell's j is the mean of its two faces, e its centre value; tau = `janosi_stress_pa`(|j|),
-    directed against e (`direction_of_stress`); f = -tau e/|e| b dx (midpoint rule).
+    A cell's j is the mean of its two faces, e its centre value; the stress tau(|j|) is
+    Janosi-Hanamoto's (`janosi_stress_pa`) with the Mohr-Coulomb strength
+    (`shear_strength_pa`), directed against e; the force
+    f = -tau e/|e| b dx (midpoint rule) [N], shape (2, n_tracks, n_cells), written into
+    ``out`` when given. The stiffness k = b dx d tau/d|j| = b dx (q_max - tau)/K [N/m], shape
+    (n_tracks, n_cells), is what :func:`soil_damper_forces` needs.
     """
-    jc = 0.5 * (j[..., :-1] + j[..., 1:])
-    j_abs = np.sqrt(jc[0] ** 2 + jc[1] ** 2)
-    e_abs = np.sqrt(e[0] ** 2 + e[1] ** 2)
-    inv = 1.0 / np.maximum(e_abs, 1e-300)
-    tau = janosi_stress_pa(j_abs, pressure_pa, cohesion_pa, tan_phi,
-                           shear_modulus_m) * (width_m * dx_m)
-    return -(tau * inv) * e
+    jc = j[..., :-1] + j[..., 1:]
+    j_abs = np.hypot(jc[0], jc[1])
+    j_abs *= 0.5
+    area = width_m * dx_m
+    strength = shear_strength_pa(pressure_pa, cohesion_pa, tan_phi)
+    tau = janosi_stress_pa(j_abs, strength, shear_modulus_m)
+    stiffness = strength - tau
+    stiffness *= area / shear_modulus_m
+    tau *= -area
+    tau /= np.maximum(np.hypot(e[0], e[1]), _TINY)
+    return np.multiply(e, tau, out=out), stiffness
+
+
+def soil_damper_forces(dj_m: np.ndarray, shear_force_n: np.ndarray,
+                       stiffness_n_per_m: np.ndarray, direction_length_m, damping_ratio: float,
+                       cell_mass_kg: float, dt_s: float) -> np.ndarray:
+    """Kelvin-Voigt dampers of the soil springs at rest, per cell [N], shape of ``dj_m``.
+
+    The damper acts on the change ``dj_m`` (2, n_tracks, n_cells) of each cell's displacement
+    over the step at a fixed hull position: zero in any steady motion (driving, steady
+    turning), so it never alters the force law there; it only damps transients (LuGre's
+    sigma_1 term, Canudas de Wit et al., IEEE TAC 40 (1995) 419-425). Along the stress
+    (``shear_force_n``, from :func:`cell_forces`) its stiffness is the Janosi tangent
+    ``stiffness_n_per_m``, across it the direction state's |f|/e_max; each damping coefficient
+    is 2 zeta sqrt(k m) for the cell's mass share m, capped at half the explicit stability
+    limit m/dt. A cell without stress has only the across part, which is then zero.
+    """
+    tau = np.hypot(shear_force_n[0], shear_force_n[1])
+    rate = np.empty((2,) + tau.shape)  # damping coefficients / dt, along and across
+    rate[0] = stiffness_n_per_m
+    np.multiply(tau, 1.0 / direction_length_m, out=rate[1])
+    np.sqrt(rate, out=rate)
+    rate *= 2.0 * damping_ratio * math.sqrt(cell_mass_kg)
+    np.minimum(rate, 0.5 * cell_mass_kg / dt_s, out=rate)
+    rate *= -1.0 / dt_s
+    n_hat = shear_force_n * (-1.0 / np.maximum(tau, _TINY))  # along the stress (0 if none)
+    along = dj_m[0] * n_hat[0]
+    along += dj_m[1] * n_hat[1]
+    dj_along = along * n_hat
+    force = dj_m - dj_along
+    force *= rate[1]
+    dj_along *= rate[0]
+    force += dj_along
+    return force
 
 
 # -- sinkage and compaction ------------------------------------------------------------------
-def bekker_sinkage_m(pressure_pa, width_m: float, k_c: float, k_phi: float, n_exp: float):
-    """Static sinkage z0 = (p/(k_c/b + k_phi))^(1/n) [m] (Bekker; Wong Ch. 2). Broadcasts."""
-    p = np.maximum(np.asarray(pressure_pa, dtype=float), 0.0)
-    return (p / (k_c / width_m + k_phi)) ** (1.0 / n_exp)
+def bekker_sinkage_m(pressure_pa, width_m, k_c, k_phi, n_exp):
+    """Static sinkage z0 = (p/(k_c/b + k_phi))^(1/n) [m] under the pressure p of a cell of a
+    track of width b (Bekker's pressure-sinkage law; Wong Ch. 2). Broadcasts."""
+    return (np.maximum(pressure_pa, 0.0) * (1.0 / (k_c / width_m + k_phi))) ** (1.0 / n_exp)
 
 
 def slip_sinkage_factor(slip):
     """Lyasko's slip-sinkage factor z/z0 = (1 + i)/(1 - 0.5 i), slip i clipped to [0, 1]
     (Lyasko, "Slip sinkage effect in soil-vehicle mechanics", J. Terramech. 47 (2010) 21-31)."""
-    i = np.clip(np.asarray(slip, dtype=float), 0.0, 1.0)
+    i = np.minimum(np.maximum(slip, 0.0), 1.0)
     return (1.0 + i) / (1.0 - 0.5 * i)
 
 
-def compaction_resistance_n(sinkage_m, width_m: float, k_c: float, k_phi: float,
-                            n_exp: float):
+def compaction_resistance_n(sinkage_m, width_m, k_c, k_phi, n_exp):
     """R_c = b (k_c/b + k_phi) z^(n+1)/(n+1) [N]: the work of cutting a rut of depth z per unit
     travel (Bekker; Wong Ch. 2 and 5). Broadcasts."""
-    z = np.maximum(np.asarray(sinkage_m, dtype=float), 0.0)
-    return (k_c + width_m * k_phi) * z ** (n_exp + 1.0) / (n_exp + 1.0)
+    return ((k_c + width_m * k_phi) / (n_exp + 1.0)) * np.maximum(sinkage_m, 0.0) ** (n_exp + 1.0)
 
 
 def rut_resistance_n(resistance_n: float, travel_m: float, cut_front_m: float,
@@ -338,62 +418,82 @@ def passive_pressure_n_per_m(height_m, unit_weight_n_m3: float, cohesion_pa,
     ``n_phi`` may be given precomputed."""
     if n_phi is None:
         n_phi = np.tan(math.pi / 4.0 + np.asarray(friction_angle_rad) / 2.0) ** 2
-    h = np.maximum(np.asarray(height_m, dtype=float), 0.0)
-    return 0.5 * unit_weight_n_m3 * h * h * n_phi + 2.0 * cohesion_pa * h * np.sqrt(n_phi)
+    h = np.maximum(height_m, 0.0)
+    p = h * (0.5 * unit_weight_n_m3 * n_phi)
+    p += 2.0 * cohesion_pa * np.sqrt(n_phi)
+    p *= h
+    return p
 
 
 def berm_height_m(area_m2, repose_rad):
     """Height of a triangular berm of cross-section A at the angle of repose alpha against a
     vertical wall: A = h^2 / (2 tan alpha), so h = sqrt(2 A tan alpha) [m]."""
-    return np.sqrt(2.0 * np.maximum(np.asarray(area_m2, dtype=float), 0.0)
-                   * np.tan(repose_rad))
+    return np.sqrt(np.maximum(area_m2, 0.0) * (2.0 * np.tan(repose_rad)))
 
 
-def advance_wall(d: np.ndarray, berm: np.ndarray, vy_cell: np.ndarray, ground_speed_mps,
-                 sinkage_m: np.ndarray, dx_m: float, dt_s: float) -> None:
+def advance_wall(walls: np.ndarray, vy_cell: np.ndarray, ground_speed_mps, sinkage_m: np.ndarray,
+                 dx_m: float, dt_s: float) -> None:
     """Advance the side walls' penetration d [m] and the berms [m^2] (in place).
 
-    Side 0 is the track's left wall, side 1 its right wall; shapes (2, n_tracks, n_cells).
-    Both states belong to the ground beside the track, which passes the hull at -V_x:
-    first-order upwinding from the entry end (front when V_x > 0), fresh soil entering. A wall
-    moving into the soil on its side (v_y > 0 for the left wall) penetrates it, d += |v_y| dt,
-    and sweeps z |v_y| dt of soil per unit length into that side's berm; moving away it unloads
-    (d decreases, never below 0: the soil does not pull). So in a turn the front of a track
-    pushes the soil on one side and its rear the soil on the other (a resisting moment).
-    ``ground_speed_mps`` has shape (n_tracks,).
+    ``walls`` has shape (2, 2, n_tracks, n_cells): ``walls[0]`` the penetration d,
+    ``walls[1]`` the berm cross-section, each with side 0 the track's left wall and side 1 its
+    right wall. Both states belong to the ground beside the track, which passes the hull at
+    -V_x: first-order upwinding from the entry end (front when V_x > 0), fresh soil entering.
+    A wall moving into the soil on its side (v_y > 0 for the left wall) penetrates it, d +=
+    |v_y| dt, and sweeps z |v_y| dt of soil per unit length into that side's berm; moving away
+    it unloads (d decreases, never below 0: the soil does not pull). So in a turn the front of
+    a track pushes the soil on one side and its rear the soil on the other (a resisting
+    moment). ``ground_speed_mps`` (V_x of each track) has length n_tracks, ``vy_cell`` and
+    ``sinkage_m`` shape (n_tracks, n_cells).
     """
-    v = np.asarray(ground_speed_mps, dtype=float)[:, None]
-    fwd, bwd = v > 1e-4, v < -1e-4
-    a = np.minimum(np.abs(v) * (dt_s / dx_m), 1.0)
-    if fwd.all():  # the common case, without masks (same arithmetic)
-        for f in (d, berm):
-            f[..., 1:] += a * (f[..., :-1] - f[..., 1:])
-            f[..., :1] -= a * f[..., :1]
+    v = [float(vi) for vi in ground_speed_mps]
+    courant = dt_s / dx_m
+    if all(vi > GROUND_SPEED_MPS for vi in v):  # the common case, all tracks at once
+        a = np.array([min(vi * courant, 1.0) for vi in v])[:, None]
+        inflow = a * walls[..., :-1]
+        walls *= 1.0 - a
+        walls[..., 1:] += inflow
     else:
-        d += a * (_upwind(d, fwd, bwd) - d)
-        berm += a * (_upwind(berm, fwd, bwd) - berm)
+        for i, vi in enumerate(v):
+            ai = min(abs(vi) * courant, 1.0)
+            w = walls[:, :, i]
+            if vi > GROUND_SPEED_MPS:
+                w[..., 1:] += ai * (w[..., :-1] - w[..., 1:])
+                w[..., :1] -= ai * w[..., :1]
+            elif vi < -GROUND_SPEED_MPS:
+                w[..., :-1] += ai * (w[..., 1:] - w[..., :-1])
+                w[..., -1:] -= ai * w[..., -1:]
+    d, berm = walls[0], walls[1]
     step = vy_cell * dt_s
     left = np.maximum(step, 0.0)  # outward motion of the left wall
     d[0] += step
     d[1] -= step
     np.maximum(d, 0.0, out=d)
     berm[0] += sinkage_m * left
-    berm[1] += sinkage_m * (left - step)
+    left -= step  # outward motion of the right wall
+    left *= sinkage_m
+    berm[1] += left
 
 
-def wall_force_n_per_m(d: np.ndarray, berm: np.ndarray, sinkage_m: np.ndarray,
-                       unit_weight_n_m3: float, cohesion_pa, friction_angle_rad,
-                       max_height_m: float, min_mobilisation_m: float = 5e-4,
-                       n_phi=None) -> np.ndarray:
-    """Lateral side-wall force per unit track length on the track [N/m], shape of one side.
+def wall_force_n_per_m(walls: np.ndarray, sinkage_m: np.ndarray, unit_weight_n_m3: float,
+                       cohesion_pa, friction_angle_rad, max_height_m: float,
+                       min_mobilisation_m: float = 5e-4, n_phi=None) -> np.ndarray:
+    """Lateral side-wall force per unit track length on the track [N/m], (n_tracks, n_cells).
 
     On each side, passive pressure (`passive_pressure_n_per_m`) on a wall of height h = z +
-    berm height (capped at ``max_height_m``: soil spills over the track), mobilised as
-    1 - e^{-d/d_b} with d_b = max(h/10, ``min_mobilisation_m``); the left soil (side 0)
-    pushes the track to -y, the right soil (side 1) to +y.
+    berm height (`berm_height_m`, capped at ``max_height_m``: soil spills over the track),
+    mobilised as 1 - e^{-d/d_b} with d_b = max(h/10, ``min_mobilisation_m``); the left soil
+    (side 0) pushes the track to -y, the right soil (side 1) to +y. ``walls`` as in
+    :func:`advance_wall`.
     """
-    h = np.minimum(sinkage_m + berm_height_m(berm, friction_angle_rad), max_height_m)
-    d_b = np.maximum(0.1 * h, min_mobilisation_m)
+    h = berm_height_m(walls[1], friction_angle_rad)
+    h += sinkage_m
+    np.minimum(h, max_height_m, out=h)
     pres = passive_pressure_n_per_m(h, unit_weight_n_m3, cohesion_pa, friction_angle_rad, n_phi)
-    mobilised = pres * (1.0 - np.exp(-d / d_b))
-    return mobilised[1] - mobilised[0]
+    h *= 0.1
+    np.maximum(h, min_mobilisation_m, out=h)  # the mobilisation length d_b
+    np.divide(walls[0], h, out=h)
+    np.negative(h, out=h)
+    np.expm1(h, out=h)
+    h *= pres  # -P (1 - e^{-d/d_b}) on each side
+    return h[0] - h[1]

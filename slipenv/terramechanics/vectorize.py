@@ -1,9 +1,10 @@
 """Array versions of the scalar force laws, derived generically (each law is written once).
 
-The force laws of this package are written once, as plain-float functions, because the
-simulation calls them per wheel and per physics substep, where numpy's per-call overhead on one
-wheel costs more than the physics (DESIGN §6). Analysis, tests and the diagnosis want them on
-arrays; this module derives those array versions from the scalar code instead of restating it:
+The force laws of this package are written once, as float functions of one wheel (in C,
+``_laws.h``, bound by the Python API), because the simulation calls them per wheel and per
+physics substep, where numpy's per-call overhead on one wheel costs more than the physics
+(DESIGN §6). Analysis, tests and the diagnosis want them on arrays; this module derives those
+array versions from the scalar functions instead of restating them:
 
 * `array_law(law)`: any scalar function of floats, broadcast over numpy arrays;
 * `forces_on_arrays(kernel_of, slip, tan_beta, load_n, soil)`: a per-wheel kernel

@@ -129,10 +129,14 @@ class VirtualTestBed:
         p.setGravity(0, 0, -G_MPS2, physicsClientId=c)
         p.setTimeStep(self.dt_s, physicsClientId=c)
         self._ground = build_terrain(TerrainSpec(), c)
-        self._soil, self._body, self._injector, self._beta = soil, None, None, None
+        self._soil = soil
+        self._body: int | None = None
+        self._injector: WheelSoilInjector | None = None
+        self._beta: float | None = None
 
-    def _build(self, slip_angle_rad: float) -> None:
-        """(Re)build the rig with the axle yawed by -beta (the wheel heads at -beta)."""
+    def _build(self, slip_angle_rad: float) -> tuple[int, WheelSoilInjector]:
+        """(Re)build the rig with the axle yawed by -beta (the wheel heads at -beta); its
+        body and injector."""
         c, w = self.client, self.wheel
         if self._body is not None:
             p.removeBody(self._body, physicsClientId=c)
@@ -170,9 +174,10 @@ class VirtualTestBed:
             max_wheel_speed_rad_s=100.0, max_wheel_torque_nm=1e3, max_speed_mps=1.0,
             max_yaw_rate_rad_s=1.0)
         handles = VehicleBody(body, [3], [3], [None], (0.0, 0.0, 0.0), w.radius_m)
-        self._injector = WheelSoilInjector(c, spec, handles, self._ground.body_id,
-                                           self.force_model, self._soil, self.dt_s)
+        self._injector = injector = WheelSoilInjector(c, spec, handles, self._ground.body_id,
+                                                      self.force_model, self._soil, self.dt_s)
         self._beta = slip_angle_rad
+        return body, injector
 
     def trial(self, slip_ratio: float, slip_angle_deg: float, speed_mps: float = 0.05,
               settle_s: float = 5.0, average_s: float = 1.0,
@@ -209,8 +214,8 @@ class VirtualTestBed:
         v_lat = tan_b * v_x if convention == "reina" else tan_b
         rim = speed_mps / math.hypot(v_x, v_lat)  # r omega [m/s]
         beta = math.atan2(v_lat, v_x)  # direction of travel relative to the heading
-        self._build(beta)
-        c, body, inj = self.client, self._body, self._injector
+        body, inj = self._build(beta)
+        c = self.client
         # The injector's rolling radius may differ from r (soil's rolling_radius_scale).
         omega = rim / inj.rolling_radius_m(0)
         p.setJointMotorControl2(body, 0, p.VELOCITY_CONTROL, targetVelocity=speed_mps,

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import pathlib
 from dataclasses import fields
+from typing import Any
 
 import numpy as np
 
@@ -116,13 +117,14 @@ def describe_misfit(fit: LawFit, data: TestBedData) -> dict:
 
 
 def analyse(data: TestBedData, base: Soil, folds: int = 5, seed: int = 0,
-            laws=LAWS) -> tuple[dict, dict[str, LawFit]]:
+            laws: tuple[str, ...] = LAWS) -> tuple[dict, dict[str, LawFit]]:
     """Fit each law, rank by held-out RMS error (F_x and F_y together), describe the best's
     misfit. Returns the JSON-ready report and the fits."""
     noise = [float(np.nanmedian(c)) for c in (data.fx_std_n, data.fy_std_n)
              if np.any(np.isfinite(c))]
     noise_n = max(noise) if noise else None
-    fits, report = {}, {"laws": {}}
+    fits: dict[str, LawFit] = {}
+    report: dict[str, Any] = {"laws": {}}
     for law in laws:
         fit = fit_law(law, data, base)
         fits[law] = fit
@@ -182,8 +184,10 @@ def plot_fits(data: TestBedData, fits: dict[str, LawFit], best: str,
                         yerr=None if np.all(np.isnan(data.fx_std_n)) else
                         (data.fx_std_n if ax is axes[0] else data.fy_std_n)[near],
                         fmt="o", color=col, ms=4, label=f"{a:.0f} deg")
+        zero = np.zeros_like(s_grid)
         grid = TestBedData(s_grid, np.full_like(s_grid, a), np.full_like(s_grid, w),
-                           *(np.zeros_like(s_grid) for _ in range(5)), meta=data.meta)
+                           fx_n=zero, fy_n=zero, sinkage_m=zero, fx_std_n=zero,
+                           fy_std_n=zero, meta=data.meta)
         for law, fit in fits.items():
             fx, fy = predict(law, fit.soil, grid)
             lw = 2.0 if law == best else 1.0
@@ -199,9 +203,9 @@ def plot_fits(data: TestBedData, fits: dict[str, LawFit], best: str,
     fig.savefig(curves, dpi=110)
     plt.close(fig)
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
-    f = fits[best]
-    axes[0].plot(data.slip_ratio, f.residual_fx_n, "o", ms=4)
-    axes[1].plot(np.abs(data.slip_angle_deg), f.residual_fy_n, "o", ms=4)
+    best_fit = fits[best]
+    axes[0].plot(data.slip_ratio, best_fit.residual_fx_n, "o", ms=4)
+    axes[1].plot(np.abs(data.slip_angle_deg), best_fit.residual_fy_n, "o", ms=4)
     for ax, xl in zip(axes, ("slip ratio [-]", "|slip angle| [deg]"), strict=True):
         ax.axhline(0.0, color="k", lw=0.8)
         ax.set(xlabel=xl, ylabel="measured - fitted [N]")

@@ -96,6 +96,8 @@ def sphere_wheel_urdf(spec: VehicleSpec) -> str:
     ground once, under the axle, as the force law assumes. Meshes, masses and inertias are
     the original's (mesh paths made absolute). The copy is written once to a cache folder.
     """
+    if spec.urdf is None:
+        raise ValueError(f"{spec.name}: built from primitives, it has no URDF to copy")
     source = os.path.join(pybullet_data.getDataPath(), spec.urdf)
     folder = os.path.dirname(source)
     with open(source) as fh:
@@ -136,7 +138,12 @@ def _explicit_default_inertials(text: str) -> str:
     return re.sub(r'<link name="[^"]+">.*?</link>', fill, text, flags=re.S)
 
 
-def _load_urdf(spec, client, position, orientation) -> VehicleBody:
+def _load_urdf(
+    spec: VehicleSpec,
+    client: int,
+    position: tuple[float, float, float],
+    orientation: tuple[float, float, float, float],
+) -> VehicleBody:
     body_id = p.loadURDF(sphere_wheel_urdf(spec), position, orientation,
                          physicsClientId=client)
     names = {
@@ -147,12 +154,19 @@ def _load_urdf(spec, client, position, orientation) -> VehicleBody:
     if missing:
         raise ValueError(f"URDF {spec.urdf!r} has no joints {missing}")
     joints = [names[n] for n in spec.urdf_wheel_joints]
+    spin_joints: list[int | None] = list(joints)
+    steer_joints: list[int | None] = [None] * len(joints)
     # husky.urdf: wheel centres 0.0783 m above base_footprint, midway at x = 0.0875 m.
-    return VehicleBody(body_id, joints, list(joints), [None] * len(joints),
+    return VehicleBody(body_id, joints, spin_joints, steer_joints,
                        (0.0875, 0.0, 0.07828), spec.wheels[0].radius_m)
 
 
-def _create_multibody(spec, client, position, orientation) -> VehicleBody:
+def _create_multibody(
+    spec: VehicleSpec,
+    client: int,
+    position: tuple[float, float, float],
+    orientation: tuple[float, float, float, float],
+) -> VehicleBody:
     lx, ly, lz = spec.chassis_size_m
     base_col = p.createCollisionShape(
         p.GEOM_BOX, halfExtents=[lx / 2, ly / 2, lz / 2], physicsClientId=client
@@ -162,7 +176,9 @@ def _create_multibody(spec, client, position, orientation) -> VehicleBody:
         physicsClientId=client,
     )
     masses, cols, viss, poss, parents, types, axes = [], [], [], [], [], [], []
-    wheel_links, spin_joints, steer_joints = [], [], []
+    wheel_links: list[int] = []
+    spin_joints: list[int | None] = []
+    steer_joints: list[int | None] = []
     h = spec.chassis_center_height_m
     for wheel in spec.wheels:
         x, y, z = wheel.position_m

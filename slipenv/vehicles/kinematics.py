@@ -36,7 +36,8 @@ def twist_to_commands(
                 delta, speed = delta + math.pi, -speed
             speeds.append(speed)
             angles[channel] = delta
-        steer = [angles.get(w.channel, 0.0) if w.steered else 0.0 for w in spec.wheels]
+        steer = [angles.get(w.channel, 0.0) if w.steered and w.channel is not None else 0.0
+                 for w in spec.wheels]
     else:
         half = spec.track_width_m / 2
         left, right = (v_mps - omega_rad_s * half) / r, (v_mps + omega_rad_s * half) / r

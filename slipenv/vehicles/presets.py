@@ -107,7 +107,7 @@ def tracked_patako(road_wheels_per_side: int = 5, track_model: str = "per_wheel"
 
 
 def tracked_patako_wong_chiang() -> VehicleSpec:
-    """:func:`tracked_patako` with the Wong-Chiang track model (issue 16): one Janosi shear
+    """:func:`tracked_patako` with the Wong-Chiang track model: one Janosi shear
     field along each track, Bekker sinkage with slip-sinkage, a rut state and side-wall
     bulldozing (``slipenv.terramechanics.track``, ``slipenv.sim.track_soil``)."""
     return dataclasses.replace(tracked_patako(track_model="wong_chiang"),

@@ -1,4 +1,4 @@
-"""``slipenv bench``'s breakdown, Coulomb reference and vectorised figure (issue 15, item 5)."""
+"""``slipenv bench``'s breakdown, Coulomb reference and vectorised figure."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The breakdown's timers count a nested timed call once (issue 15: ``_observe`` calls the
+"""The breakdown's timers count a nested timed call once (``_observe`` calls the
 timed path projection; counting it in both moved its time out of ``rest`` twice)."""
 
 from __future__ import annotations

@@ -82,7 +82,7 @@ def _small_log(kind="diff_drive", n=40, gt=True) -> Log:
     (lambda p: p / "missing", "no such log folder"),
     (lambda p: p, "no log folders in it"),
     (lambda p: _write(p, _small_log(n=100)), "at least 4"),
-    # rover logs are diagnosed (issue 14), but the replay must know the front from the rear
+    # rover logs are diagnosed, but the replay must know the front from the rear
     (lambda p: _write(p, _small_log("rover4ws", n=400)), "front from rear"),
     (lambda p: _corrupt_meta(_write(p, _small_log(n=400))), "meta.json"),
     (lambda p: _corrupt_signals(_write(p, _small_log(n=400))), "non-numeric value"),

@@ -20,7 +20,7 @@ from tests.diagnose.test_replay import R, kinematic_log, route
 
 VOCABULARY = ("none", "rolling_radius", "track_width", "torque_slip", "turning_slip",
               "slope_side_slip", "combined_slip", "soil_patch", "soil_map",
-              "gyro_bias")  # log-format.md, and soil_map (issue 14)
+              "gyro_bias")  # log-format.md, and soil_map
 
 
 def test_registry_holds_the_vocabulary_in_its_order():

@@ -1,4 +1,4 @@
-"""Issue 14 items 3-4: every vehicle kind is diagnosed (rover4ws included; torque slip on
+"""Every vehicle kind is diagnosed (rover4ws included; torque slip on
 skid-steer and rover logs), and soil that varies in space is mapped as regions with
 continuous edges (unions of rectangles) that the simulation takes as a ``PatchSoilMap``.
 Logs from the kinematic generator."""
@@ -269,7 +269,7 @@ def test_the_fitted_map_is_applied_to_the_simulation_as_patches(field_problem):
 
 @pytest.mark.parametrize("kind", ["skid_steer", "rover4ws"])
 def test_soil_regions_are_mapped_on_skid_steer_and_rover_logs(kind):
-    """Issue 14 item 4: the map applies wherever torque slip does. The fields of ``REGIONS``
+    """The map applies wherever torque slip does. The fields of ``REGIONS``
     under a skid-steer vehicle's and the rover's wheels: every wheel slips by its own torque
     times the compliance of the ground under the vehicle."""
     log = kinematic_log(3, None, duration_s=180.0, route="field", soil_regions=REGIONS,

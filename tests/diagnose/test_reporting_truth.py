@@ -1,4 +1,4 @@
-"""Issue 11 item 7: a diagnosis never prints inf or NaN, an estimate whose standard error
+"""A diagnosis never prints inf or NaN, an estimate whose standard error
 exceeds it is "not determined", an implausible no-ground-truth estimate is declared so, and a
 failing least-squares fit is an error naming the log."""
 

@@ -1,4 +1,4 @@
-"""Issue 14 item 4: the PyBullet generator of hidden-effect logs drives every vehicle kind the
+"""The PyBullet generator of hidden-effect logs drives every vehicle kind the
 simulator has (a tracked vehicle and the 4WD/4WS rover besides the farm robot and the
 four-wheel skid-steer), and hides each effect wherever its physics applies."""
 

@@ -1,4 +1,4 @@
-"""Issue 14 item 4: torque slip hidden in the physics of every vehicle kind.
+"""Torque slip hidden in the physics of every vehicle kind.
 
 The rover's drive torque on level rigid ground is its wheels fighting one another over the
 steering geometry, which a softer longitudinal law takes away (s = T/k_s of 0.2-0.4 % was

@@ -1,4 +1,4 @@
-"""Issue 11: dropped envs release their PyBullet client; resets do not grow native memory."""
+"""Dropped envs release their PyBullet client; resets do not grow native memory."""
 
 from __future__ import annotations
 

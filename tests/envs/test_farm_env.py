@@ -50,17 +50,17 @@ def test_observation_is_the_slip_aware_ekf_estimate(default_run) -> None:
     errors = np.array([np.hypot(*(i["estimated_pose"][:2] - i["true_pose"][:2]))
                        for i in infos[1:]])
     assert np.all(errors > 0.0)  # an estimate, not the truth
-    # ... within 25 cm once the filter has settled (dead reckoning ends metres off). It was
-    # 9 cm before issue 16's relaxation length (the contact arc, ~3x the soil's K): the lightly
-    # damped soil spring makes the slip ring at launch (0.24/0.06/0.14), which biases the
-    # early R_w estimate (0.346 against 0.334); measured 0.196 m on this run.
+    # ... within 25 cm once the filter has settled (dead reckoning ends metres off). With the
+    # relaxation length of the contact arc (~3x the soil's K) the lightly damped soil spring
+    # makes the slip ring at launch (0.24/0.06/0.14), which biases the early R_w estimate
+    # (0.346 against 0.334); measured 0.196 m on this run.
     assert errors[-100:].max() < 0.25
     extras = info["estimator_extras"]
     assert extras["n_bearings_used"] > 100  # the laser beacons are fused
     # Under near-constant torque only the effective radius R_w (1 - T / k_s) is observable
     # (Lindgren Eq. 37): it is learnt, within 1 cm of the truth r (1 - s) and closer to it than
-    # the nominal 0.275 m (measured 0.7 against 0.9 cm on the left wheel: issue 16's longer
-    # relaxation length rings the slip at launch and biases the early estimate); R_w and k_s
+    # the nominal 0.275 m (measured 0.7 against 0.9 cm on the left wheel: the relaxation length
+    # of the contact arc rings the slip at launch and biases the early estimate); R_w and k_s
     # themselves are still converging.
     torque, slip = info["sensors"].wheel_torque_nm, info["wheel_slip"][:2]
     for k, (side, true_r) in enumerate((("l", 0.283), ("r", 0.287))):  # soil radii, §3.2

@@ -1,4 +1,4 @@
-"""Issue 16: the injector's ``multi_pass`` and the force models' ``lateral_stiffness_ratio``
+"""The injector's ``multi_pass`` and the force models' ``lateral_stiffness_ratio``
 are make options that reach the physics; bad values fail at make time; defaults are off / 1."""
 
 from __future__ import annotations

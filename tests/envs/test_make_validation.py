@@ -1,4 +1,4 @@
-"""Issue 11: every bad option is a ValueError at ``gymnasium.make`` naming it; good ones build."""
+"""Every bad option is a ValueError at ``gymnasium.make`` naming it; good ones build."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Issue 11: seeds make different episodes, the same seed the same one; defaults that work."""
+"""Seeds make different episodes, the same seed the same one; defaults that work."""
 
 from __future__ import annotations
 

@@ -80,8 +80,7 @@ def test_on_the_15_degree_slope_both_controllers_complete_the_lap(feedforward):
     "against 0.168 m on seeds 0-2): the odometry, not the law, limits the lap. Gyrodometry "
     "ends a lap 0.6 m off and Endo with the true β still 0.27 m, because heading downhill "
     "the vehicle runs ahead of its tracks (common-mode slip that Endo's relation cannot "
-    "express); with the true pose and β the feed-forward halves the error (next test). "
-    "Issue 4."))
+    "express); with the true pose and β the feed-forward halves the error (next test)."))
 def test_on_the_15_degree_slope_feedforward_beats_feedback_on_every_seed():
     for seed in (0, 1, 2):
         assert lap(True, seed)["mean"] < lap(False, seed)["mean"]

@@ -183,7 +183,8 @@ def simulate(
                          p.radius_var_per_m, p.k_s_rel_var_per_m)
         x[:n] = lm.process_fx(x[:n], dt_s) + (_sample(rng, Q) if process_noise else 0.0)
         T_new = np.asarray(torque_fn(t, x), dtype=float)
-        dc = lo.odo_slip_hx(x, dt_s, 0.5 * (T + T_new), g.track_width_m, g.counts_per_rad)
+        dc = lo.odo_slip_hx(x, dt_s, 0.5 * (T + T_new), g.track_width_m, g.counts_per_rad,
+                             lo.NO_SOIL)
         counts = counts + dc + sd["odo"] * rng.standard_normal(2)
         T = T_new
         bearings = empty if scanner is None else scanner.scan(

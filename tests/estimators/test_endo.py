@@ -34,10 +34,11 @@ def test_closed_form_solves_eq7_and_eq8():
     v_r = rng.choice([-1.0, 1.0], k) * rng.uniform(0.01, 0.3, k)
     omega = rng.uniform(-1.0, 1.0, k)
     for n in (0.824, 1.3):
-        alpha_l, alpha_r = endo_slip_ratios(v_l, v_r, omega, TREAD, n, speed_eps_mps=0.0)
-        _, _, omega_back = body_velocity(v_l, v_r, alpha_l, alpha_r, 0.0, TREAD)
-        np.testing.assert_allclose(omega_back, omega, rtol=0, atol=1e-12)  # Eq. 7
-        np.testing.assert_allclose(alpha_l / alpha_r, endo_ratio(v_l, v_r, n), rtol=1e-10)  # Eq. 8
+        for vl, vr, om in zip(v_l, v_r, omega, strict=True):
+            alpha_l, alpha_r = endo_slip_ratios(vl, vr, om, TREAD, n, speed_eps_mps=0.0)
+            _, _, omega_back = body_velocity(vl, vr, alpha_l, alpha_r, 0.0, TREAD)
+            assert omega_back == pytest.approx(om, rel=0, abs=1e-12)  # Eq. 7
+            assert alpha_l / alpha_r == pytest.approx(endo_ratio(vl, vr, n), rel=1e-10)  # Eq. 8
 
 
 def test_pivot_turn_loses_equal_fractions():
@@ -75,7 +76,7 @@ def test_stopped_track_limit():
     s_l, s_r = endo_slip_velocities(0.0, 0.1, 0.1, TREAD, 0.824, speed_eps_mps=0.0)
     assert s_l == 0.0 and s_r == pytest.approx(-(TREAD * 0.1 - 0.1))
     # The regularised share is finite and tends to the exact one as eps -> 0.
-    shares = [float(endo_left_share(0.0, 0.1, 0.824, eps)) for eps in (1e-3, 1e-6, 1e-12)]
+    shares = [endo_left_share(0.0, 0.1, 0.824, eps) for eps in (1e-3, 1e-6, 1e-12)]
     assert shares == sorted(shares, reverse=True) and shares[-1] < 0.05
     assert np.isfinite(endo_slip_ratios(0.0, 0.1, 0.1, TREAD, 0.824)).all()
     assert np.isfinite(endo_slip_velocities(0.0, 0.0, 0.1, TREAD, 1.5)).all()  # n > 1
@@ -96,6 +97,26 @@ def test_bad_n_is_rejected(n):
         EndoOdometry(GEOM, n)
     with pytest.raises(ValueError, match="n must"):
         endo_slip_ratios(0.1, 0.2, 0.1, TREAD, n)
+
+
+def test_endo_ratio_sign_follows_the_track_directions():
+    """Eq. 8: opposite-sign slip ratios when both tracks drive forward, equal signs in a pivot
+    (v_l = -v_r, where |v_r / v_l| = 1)."""
+    assert endo_ratio(0.1, 0.2, 0.824) == pytest.approx(-(2.0**0.824))
+    assert endo_ratio(-0.1, 0.1, 0.824) == pytest.approx(1.0)
+    assert math.isnan(endo_ratio(0.0, 0.1, 0.824))
+
+
+def test_odometry_step_is_eq1_with_the_closed_form_slips():
+    """One step of EndoOdometry moves (Δs_l + Δs_r)/2 - (s_l + s_r) dt / 2 (Eq. 1) with the
+    slips of :func:`endo_slip_velocities` and reports their ratios."""
+    odo = EndoOdometry(GEOM, 0.824)
+    dt, d_l, d_r, dyaw = 0.05, 0.004, 0.006, 0.0015
+    forward, beta, extras = odo._translation(d_l, d_r, dyaw, dt, constant_run(0, 0, 0, 1)[0])
+    s_l, s_r = endo_slip_velocities(d_l / dt, d_r / dt, dyaw / dt, TREAD, 0.824)
+    assert beta == 0.0
+    assert forward == pytest.approx(0.5 * (d_l + d_r) - 0.5 * (s_l + s_r) * dt, rel=1e-15)
+    assert extras["alpha_l"] == pytest.approx(s_l / (d_l / dt), rel=1e-3)  # |v| >> ε
 
 
 def test_bad_eps_and_tread_are_rejected():

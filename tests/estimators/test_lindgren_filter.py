@@ -13,6 +13,7 @@ from filterpy.kalman import ExtendedKalmanFilter
 
 from slipenv.contracts.frame import SensorFrame
 from slipenv.estimators.base import Estimator, OdometryGeometry
+from slipenv.estimators.lindgren import kernel
 from slipenv.estimators.lindgren import models as lm
 from slipenv.estimators.lindgren import observations as lo
 from slipenv.estimators.lindgren.ekf import (
@@ -21,6 +22,7 @@ from slipenv.estimators.lindgren.ekf import (
     OracleSoil,
     Scheme,
     parse_scheme,
+    warm_up,
 )
 from slipenv.sensors.beacons import BeaconScanner, default_beacons_xy
 from tests.estimators.lindgren_synth import simulate, straight_and_turn, torque, truth0
@@ -186,16 +188,47 @@ def test_rejected_frames_leave_the_state_unchanged() -> None:
             ekf.update(f)
         assert_unchanged(ekf, snap)
 
-    def boom(*args, **kwargs):
+    real_kernel = kernel.filter_frame
+
+    def boom(*args):  # the frame's arithmetic runs (on the filter's copies), then fails
+        real_kernel(*args)
         raise FloatingPointError("injected")
 
-    ekf._update_odometry = boom  # fails after the bearing and inertial updates of the frame
-    with pytest.raises(FloatingPointError):
-        ekf.update(nxt)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(kernel, "filter_frame", boom)
+        with pytest.raises(FloatingPointError):
+            ekf.update(nxt)
     assert_unchanged(ekf, snap)
-    del ekf._update_odometry
     ekf.update(nxt)
     assert len(ekf.history["odo"]) == snap[2]["odo"] + 1
+
+
+def test_odometry_update_that_would_make_k_s_negative_is_undone() -> None:
+    """Counts far beyond the prediction with a loose k_s prior push k_s below zero: the update
+    is dropped (``odo_invalid_soil``) and the state is the prediction alone."""
+    x = np.zeros(lm.N_SLIP)
+    x[lm.IV], x[lm.IRL:lm.IRR + 1], x[lm.IKL:] = 1.0, 0.275, 100.0
+    P = np.diag([1e-2] * 9 + [1e-4, 1e-4, 1e6, 1e6])
+    ekf, pred = LindgrenEKF(GEOM, 4), LindgrenEKF(GEOM, 4)
+    for f in (ekf, pred):
+        f.reset_state(x, P, frame(0.0, torque=(10.0, 10.0)))
+    pred.predict_to(0.05)
+    ekf.update(frame(0.05, counts=(400.0, 400.0), torque=(10.0, 10.0)))
+    assert ekf.skipped["odo_invalid_soil"] == 1 and ekf.history["odo"] == []
+    np.testing.assert_array_equal(ekf.x, pred.x)
+    np.testing.assert_array_equal(ekf.P, pred.P)
+
+
+def test_predict_to_replaces_the_arrays_instead_of_writing_into_them() -> None:
+    ekf = LindgrenEKF(GEOM, 4)
+    ekf.reset(0.0, 0.0, 0.0, frame(0.0, torque=(10.0, 10.0)))
+    x_old, P_old = ekf.x, ekf.P
+    x_copy, P_copy = x_old.copy(), P_old.copy()
+    ekf.predict_to(0.1)
+    assert ekf.x is not x_old and ekf.P is not P_old
+    np.testing.assert_array_equal(x_old, x_copy)
+    np.testing.assert_array_equal(P_old, P_copy)
+    assert not np.array_equal(ekf.P, P_copy)  # it did predict
 
 
 def test_nan_optional_sensors_are_counted_and_logged(caplog: pytest.LogCaptureFixture) -> None:
@@ -228,3 +261,9 @@ def test_history_layout() -> None:
         assert all(y.shape == (n_z,) and S.shape == (n_z, n_z) for _, y, S in recs)
         assert np.all(np.diff([r[0] for r in recs]) >= 0.0)
     assert ekf.estimate().extras["n_bearings_used"] == len(ekf.history["bearing"])
+
+
+def test_warm_up_runs_every_sensor_quietly(caplog: pytest.LogCaptureFixture) -> None:
+    with caplog.at_level(logging.WARNING, logger="slipenv.estimators.lindgren.ekf"):
+        warm_up()
+    assert caplog.text == ""

@@ -1,4 +1,5 @@
-"""Lindgren EKF models: Jacobians against finite differences, closed forms, paper equations."""
+"""Lindgren EKF models: Jacobians against central finite differences, closed forms, the paper's
+equations. The functions tested are the compiled ones the filter runs."""
 
 from __future__ import annotations
 
@@ -60,7 +61,7 @@ def test_observation_jacobians(seed: int) -> None:
     args = (TAU, 0.275, W, CPR)
     assert_jacobian(lo.odo_H(x, *args), lambda s: lo.odo_hx(s, *args), x)
     beacon = np.array([14.0, 9.0])
-    assert_jacobian(lo.bearing_H(x, beacon), lambda s: lo.bearing_hx(s, beacon), x)
+    assert_jacobian(lo.bearing_H(x, beacon), lambda s: lo.bearing_hx(s, beacon[None]), x)
 
 
 @pytest.mark.parametrize("torque", [(120.0, 300.0), (-80.0, 40.0)])
@@ -69,14 +70,14 @@ def test_slip_odometry_jacobian_eq38_41(torque: tuple[float, float], v: float) -
     """Eq. 37's Jacobian (Eq. 38-41 plus the mean-speed columns) for drive, brake, reverse."""
     x = state(0, v=v)
     T = np.array(torque)
-    assert_jacobian(lo.odo_slip_H(x, TAU, T, W, CPR),
-                    lambda s: lo.odo_slip_hx(s, TAU, T, W, CPR), x)
-    soil = OracleSoil((0.283, 0.287), (2500.0, 2200.0))
-    x9 = x[:lm.N_BASE]
+    assert_jacobian(lo.odo_slip_H(x, TAU, T, W, CPR, lo.NO_SOIL),
+                    lambda s: lo.odo_slip_hx(s, TAU, T, W, CPR, lo.NO_SOIL), x)
+    soil = OracleSoil((0.283, 0.287), (2500.0, 2200.0)).as_array()
+    x9 = x[:lm.N_BASE].copy()
     assert_jacobian(lo.odo_slip_H(x9, TAU, T, W, CPR, soil),
                     lambda s: lo.odo_slip_hx(s, TAU, T, W, CPR, soil), x9)
     np.testing.assert_allclose(lo.odo_slip_hx(x9, TAU, T, W, CPR, soil),
-                               lo.odo_slip_hx(x, TAU, T, W, CPR), rtol=1e-14)
+                               lo.odo_slip_hx(x, TAU, T, W, CPR, lo.NO_SOIL), rtol=1e-14)
 
 
 def test_slip_jacobian_matches_paper_formulas() -> None:
@@ -84,7 +85,7 @@ def test_slip_jacobian_matches_paper_formulas() -> None:
     x = state(1)
     x[lm.IVD] = x[lm.IOMD] = 0.0
     T = np.array([150.0, 260.0])
-    H = lo.odo_slip_H(x, TAU, T, W, CPR)
+    H = lo.odo_slip_H(x, TAU, T, W, CPR, lo.NO_SOIL)
     gamma = 1.0 / CPR
     v, om = x[lm.IV], x[lm.IOM]
     for i, (sign, ir, ik) in enumerate([(-1.0, lm.IRL, lm.IKL), (1.0, lm.IRR, lm.IKR)]):
@@ -98,14 +99,14 @@ def test_slip_jacobian_matches_paper_formulas() -> None:
         assert H[i, ik] == pytest.approx(-TAU * t / (r_w * gamma) * va / (k_s - t) ** 2,
                                          rel=1e-12)
         # Eq. 37 itself
-        z = lo.odo_slip_hx(x, TAU, T, W, CPR)[i]
+        z = lo.odo_slip_hx(x, TAU, T, W, CPR, lo.NO_SOIL)[i]
         assert z == pytest.approx(TAU / gamma * va * k_s / (r_w * (k_s - t)), rel=1e-12)
 
 
 def test_slip_model_reduces_to_eq15_without_torque() -> None:
     x = state(2)
     x[lm.IRL:lm.IRR + 1] = 0.275
-    np.testing.assert_allclose(lo.odo_slip_hx(x, TAU, np.zeros(2), W, CPR),
+    np.testing.assert_allclose(lo.odo_slip_hx(x, TAU, np.zeros(2), W, CPR, lo.NO_SOIL),
                                lo.odo_hx(x, TAU, 0.275, W, CPR), rtol=1e-14)
 
 
@@ -117,11 +118,13 @@ def test_odometry_closed_form() -> None:
     x[lm.IRL:lm.IRR + 1] = 0.275
     x[lm.IKL:] = 1000.0
     np.testing.assert_allclose(lo.odo_hx(x, TAU, 0.275, W, CPR), 0.05 * 285 / 0.275)
-    np.testing.assert_allclose(lo.odo_slip_hx(x, TAU, np.array([200.0, 200.0]), W, CPR),
+    T = np.array([200.0, 200.0])
+    np.testing.assert_allclose(lo.odo_slip_hx(x, TAU, T, W, CPR, lo.NO_SOIL),
                                0.05 * 285 / 0.275 / 0.8)
-    np.testing.assert_allclose(lo.wheel_slip(x, TAU, np.array([200.0, -100.0]), W), [0.2, -0.1])
+    np.testing.assert_allclose(lo.wheel_slip(x, TAU, np.array([200.0, -100.0]), W, lo.NO_SOIL),
+                               [0.2, -0.1])
     x[lm.IV] = -1.0  # reverse driving with driving torque: the wheel still overspins
-    np.testing.assert_allclose(lo.odo_slip_hx(x, TAU, np.array([-200.0, -200.0]), W, CPR),
+    np.testing.assert_allclose(lo.odo_slip_hx(x, TAU, -T, W, CPR, lo.NO_SOIL),
                                -0.05 * 285 / 0.275 / 0.8)
 
 
@@ -210,7 +213,7 @@ def test_nearest_beacon_picks_smallest_innovation() -> None:
     x[lm.ITH] = 0.3
     beacons = np.array([[10.0, 0.0], [10.0, 3.0], [0.0, 10.0], [-8.0, -8.0]])
     for j in range(len(beacons)):
-        z = float(lo.bearing_hx(x, beacons[j])) + 0.01
+        z = float(lo.bearing_hx(x, beacons[j:j + 1])[0]) + 0.01
         k, y = lo.nearest_beacon(x, z, beacons)
         assert k == j
         assert y == pytest.approx(0.01)
@@ -219,6 +222,7 @@ def test_nearest_beacon_picks_smallest_innovation() -> None:
 def test_oracle_soil_validation() -> None:
     soil = OracleSoil([0.283, 0.287], [2500, 2200])
     assert soil.wheel_radius_m == (0.283, 0.287)
+    np.testing.assert_array_equal(soil.as_array(), [0.283, 0.287, 2500.0, 2200.0])
     with pytest.raises(ValueError, match="k_s"):
         OracleSoil((0.283, 0.287), (2500.0, -1.0))
     with pytest.raises(ValueError, match="wheel_radius_m"):

@@ -1,4 +1,4 @@
-"""`slipenv reproduce lindgren --quick`: the JSON contract of issue #3 and its targets, from a
+"""`slipenv reproduce lindgren --quick`: the JSON contract and its targets, from a
 real run; the offline filter passes and the helpers on their own."""
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ def test_json_has_the_required_keys_and_the_papers_numbers(quick) -> None:
 
 
 def test_quick_run_meets_the_targets(quick) -> None:
-    """Issue #3: slip model <= 0.3 x no slip model after the laser cut; scheme 4 deviation
+    """The targets: slip model <= 0.3 x no slip model after the laser cut; scheme 4 deviation
     <= 0.7 x scheme 3; scheme 4's NIS closer to the band (1.5 x oracle: the next tests)."""
     result, doc, _ = quick
     m = doc["metrics"]
@@ -71,7 +71,7 @@ def test_quick_run_meets_the_targets(quick) -> None:
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "issue #3 target, missed on the wheel-soil injection of issue 16 (straight driving at "
+    "a target missed on the current wheel-soil injection (straight driving at "
     "~87 N m per wheel, ~11 % slip): 50 s of bearings (one turn) leave each side's split of "
     "R_w and k_s unlearnt (at steady torque only R_w (1 - T/k_s) is observable), and the "
     "left/right effective-radius error becomes heading error after the cut; with the cut at "
@@ -117,7 +117,7 @@ def test_the_results_page_holds_the_command_the_table_and_the_figures(quick) -> 
 
 
 def test_robust_block_has_the_headline_keys(quick) -> None:
-    """Issue 16 item 7: ``metrics.robust`` has the same keys as the headline metrics."""
+    """``metrics.robust`` has the same keys as the headline metrics."""
     _, doc, _ = quick
     m = doc["metrics"]
     robust = m["robust"]

@@ -2,7 +2,7 @@
 
 The quick run (fewer repetitions, the same experiments) is run once per module through the
 command line, as a user would: in the default world, the Wong-Chiang track model on
-``dry_sand`` (issue 16).
+``dry_sand``.
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ def test_the_limits_are_measured_and_a_perfect_slip_angle_regression_does_not_hu
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "issue 16: paper 0.832 / 0.817 / 0.824 at 0 / 8 / 15°; the Wong-Chiang track model on "
+    "Endo's n: paper 0.832 / 0.817 / 0.824 at 0 / 8 / 15°; the Wong-Chiang track model on "
     "dry_sand gives 0.818 / 0.764 / 0.917 (quick; full 0.825 / 0.769 / 0.694): within 0.05 on "
     "flat ground, not on the slopes, where Eq. 8 fits the true slips with R² 0.83 (8°) and "
     "0.48 (15°; full 0.82, 0.33) against 0.97 on flat ground, and n fitted per turning "

@@ -1,5 +1,5 @@
-"""The Yamauchi world can run on the Wong-Chiang track model and a loose sand (issue 16), and
-such a run writes its own results page (issue 16 item 6)."""
+"""The Yamauchi world can run on the Wong-Chiang track model and a loose sand, and
+such a run writes its own results page."""
 
 from __future__ import annotations
 
@@ -33,8 +33,8 @@ def test_settings_choose_the_vehicle_and_soil_of_every_world():
 # -- the results page of another world (no run: a small made-up result) --------------------
 FIGURES = ("fig4_endo_n.png", "fig8_circle.png")
 PER_WHEEL_MECHANISMS = ("Janosi shear injected under each road wheel", "runs ahead of both tracks",
-                        "shipped", "Issue 16 traces", "faster than the law follows",
-                        "needs stiffer gains")
+                        "shipped", "These limits trace to the per-wheel track law",
+                        "faster than the law follows", "needs stiffer gains")
 
 
 def made_up_result(vehicle: str | None, soil: str | None) -> dict:
@@ -115,7 +115,7 @@ def test_the_preset_world_keeps_its_page_command_and_mechanisms(tmp_path, figure
     page = write_results_page(made_up_result(None, None), figures, tmp_path)
     assert page == tmp_path / "yamauchi.md"
     text = page.read_text()
-    # The command's default world is the track model's (issue 16): the preset's is spelt out.
+    # The command's default world is the track model's: the preset's is spelt out.
     assert (f"`slipenv reproduce yamauchi --vehicle tracked_patako --soil toyoura_sand --quick "
             f"--seed 3 --docs {tmp_path}`") in text
     for sentence in PER_WHEEL_MECHANISMS:
@@ -149,7 +149,7 @@ def test_the_cli_runs_the_world_it_is_given_from_the_quick_or_full_plan(monkeypa
 
 
 def test_the_command_runs_the_track_model_by_default_and_settings_keep_the_env_world():
-    """Issue 16 item 6: ``slipenv reproduce yamauchi`` (plans FULL and QUICK) runs the
+    """``slipenv reproduce yamauchi`` (plans FULL and QUICK) runs the
     Wong-Chiang track model on dry_sand; ``Settings()`` stays the env preset's world."""
     for plan in (FULL, QUICK):
         assert (plan.vehicle, plan.soil) == ("tracked_patako_wong_chiang", "dry_sand")

@@ -1,4 +1,4 @@
-"""Issue 11: physically impossible values are errors naming file, row (or key) and column."""
+"""Physically impossible values are errors naming file, row (or key) and column."""
 
 from __future__ import annotations
 

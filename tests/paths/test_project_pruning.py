@@ -1,4 +1,4 @@
-"""``Path.project`` skips segments by their bounding boxes without changing one bit (issue 15).
+"""``Path.project`` skips segments by their bounding boxes without changing one bit.
 
 A segment whose box lies farther from the query than the best point found so far cannot
 replace it, so the projection skips it. The reference below is the search without boxes (every

@@ -1,4 +1,4 @@
-"""``BeaconScanner.scan`` gives bit for bit what its plain numpy form gave (issue 15).
+"""``BeaconScanner.scan`` gives bit for bit what its plain numpy form gives.
 
 The scan runs at every control step; it now updates its arrays in place and interpolates the
 pose at the hits in one broadcast. The reference below is the scan as it was written before

@@ -1,6 +1,6 @@
 """The beacon scanner reuses the last pose's beacon bearings only for that very pose.
 
-Issue 15: ``BeaconScanner.scan`` starts each sweep from the previous call's pose, whose
+``BeaconScanner.scan`` starts each sweep from the previous call's pose, whose
 bearings it keeps instead of computing them twice. A scanner moved by ``reset`` to another
 pose must then give exactly what a new scanner placed there gives.
 """

@@ -72,7 +72,7 @@ def test_negative_or_nan_noise_is_rejected(field):
 
 
 def test_the_suite_draws_what_each_sensor_would_draw_in_turn():
-    # the suite draws all its noise at once (issue 15): the frame must be the one the sensors
+    # the suite draws all its noise at once: the frame must be the one the sensors
     # give when each draws its own, in the suite's order, from the same generator state
     noise = SensorNoise(torque_rel_std=0.05, compass_std_rad=0.02, incl_std_rad=0.01)
     suite = SensorSuite(285.0, noise)

@@ -1,7 +1,7 @@
 """The contact history keeps the newest points at the minimum spacing, whatever its storage.
 
-Issue 15 moved ``ContactHistory`` from lists of small arrays to one buffer per wheel; the
-tracks must be exactly those of the plain rule: a point is kept when it is finite and at least
+``ContactHistory`` keeps one buffer per wheel, not lists of small arrays; its tracks must be
+exactly those of the plain rule: a point is kept when it is finite and at least
 ``min_spacing_m`` from the wheel's last kept point, and only the newest ``max_points`` stay.
 """
 

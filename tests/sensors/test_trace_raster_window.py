@@ -1,4 +1,4 @@
-"""The windowed polyline distance equals the whole-image one bit for bit (issue 15).
+"""The windowed polyline distance equals the whole-image one bit for bit.
 
 The distance transform runs on a crop around the window of at least
 ``EXACT_TRANSFORM_MIN_PIXELS``, where OpenCV's precise transform is the exact Euclidean one

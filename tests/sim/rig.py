@@ -91,5 +91,27 @@ class SingleWheelRig:
                 "slip": float(np.mean(slips)), "thrust_n": float(np.mean(thrusts)),
                 "resistance_n": float(np.mean(res))}
 
+    def drive_torque(self, ground_speed_mps: float, torque_nm: float, seconds: float = 3.0,
+                     average_s: float = 1.0) -> dict:
+        """Carriage at a fixed speed, the wheel driven by a constant torque [N m] (its speed
+        free); mean slip, thrust and load over the last ``average_s``."""
+        c = self.client
+        p.setJointMotorControl2(self.body, 0, p.VELOCITY_CONTROL,
+                                targetVelocity=ground_speed_mps, force=1e4, physicsClientId=c)
+        p.setJointMotorControl2(self.body, 2, p.VELOCITY_CONTROL, force=0.0, physicsClientId=c)
+        n, n_avg = int(seconds / DT_S), int(average_s / DT_S)
+        slips, thrusts, loads = [], [], []
+        for i in range(n):
+            p.setJointMotorControl2(self.body, 2, p.TORQUE_CONTROL, force=torque_nm,
+                                    physicsClientId=c)
+            self.injector.apply()
+            p.stepSimulation(physicsClientId=c)
+            if i >= n - n_avg:
+                slips.append(self.injector.s[0])
+                thrusts.append(self.injector.fx[0])
+                loads.append(self.injector.load[0])
+        return {"slip": float(np.mean(slips)), "thrust_n": float(np.mean(thrusts)),
+                "load_n": float(np.mean(loads))}
+
     def close(self) -> None:
         p.disconnect(self.client)

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from slipenv.contracts.constants import G_MPS2
 from slipenv.diagnose.segments import Segments
@@ -73,7 +74,7 @@ class Term:
         return rate
 
 
-def require(condition: bool, owner: object, message: str) -> None:
+def require(condition: bool | np.bool_, owner: object, message: str) -> None:
     """``ValueError`` naming the parameter class unless ``condition`` (for ``__post_init__``)."""
     if not condition:
         raise ValueError(f"{type(owner).__name__}: {message}")
@@ -89,7 +90,10 @@ def applicable_to_world(condition: bool, effect: str, names: str, why: str) -> N
 
 
 def finite(owner: object) -> None:
-    """``ValueError`` naming the field unless every field of ``owner`` is a finite number."""
+    """``ValueError`` naming the field unless every field of ``owner`` (a dataclass) is a
+    finite number."""
+    if not dataclasses.is_dataclass(owner):
+        raise TypeError(f"{type(owner).__name__} is not a dataclass")
     for f in dataclasses.fields(owner):
         value = getattr(owner, f.name)
         require(isinstance(value, int | float) and not isinstance(value, bool)
@@ -251,10 +255,11 @@ class Hiding:
     compare: bool = True
     drawn: bool = True
 
-    def sloped(self, kind: str) -> bool:
-        """True if a vehicle of ``kind`` always stands on a slope of ``slope_deg``."""
-        return self.slope_deg is not None and (self.slope_kinds is None
-                                               or kind in self.slope_kinds)
+    def slope_range(self, kind: str) -> tuple[float, float] | None:
+        """``slope_deg`` if a vehicle of ``kind`` always stands on a slope, else None."""
+        if self.slope_kinds is None or kind in self.slope_kinds:
+            return self.slope_deg
+        return None
 
 
 @dataclass(frozen=True)
@@ -288,6 +293,8 @@ def needs_torque(seg: Segments) -> str | None:
 
 def torque_scale(seg: Segments) -> float:
     """Typical |torque| [N m] of the moving samples (sets the compliance scale)."""
+    if seg.torque is None:
+        raise ValueError("no torque_<wheel> columns")
     moving = np.abs(seg.dphi).sum(axis=-1) > 0
     tq = np.abs(seg.torque[moving]) if moving.any() else np.abs(seg.torque)
     return max(float(np.median(tq)), 1e-3)
@@ -304,7 +311,7 @@ def stiffness_nm(compliance_per_nm: float) -> float:
     return 1.0 / compliance_per_nm if abs(compliance_per_nm) > 1.0 / HUGE else HUGE
 
 
-def side_values(values: np.ndarray, seg: Segments) -> np.ndarray:
+def side_values(values: ArrayLike, seg: Segments) -> np.ndarray:
     """Per-side values (left, right) spread to the wheels, (n_wheels,)."""
     return np.asarray(values, dtype=float)[seg.sides]
 
@@ -466,13 +473,13 @@ class Effect:
         out: dict[str, list[float]] = {}
         for c in (c for c in self.contract if isinstance(c, Scalar)):
             out[c.name] = [float(getattr(params, c.field)), float(se[c.field])]
-        for c in (c for c in self.contract if isinstance(c, PerSide)):
+        for p in (c for c in self.contract if isinstance(c, PerSide)):
             for w, side in zip(wheels, sides, strict=True):
-                name = (c.left, c.right)[side]
+                name = (p.left, p.right)[side]
                 v, e = float(getattr(params, name)), float(se[name])
-                if c.reciprocal:
+                if p.reciprocal:
                     v, e = (1.0 / v, e / v**2) if abs(v) > 1.0 / HUGE else (HUGE, HUGE)
-                out[c.template.format(w=w)] = [v, e]
+                out[p.template.format(w=w)] = [v, e]
         return out
 
     def from_contract(self, values: dict[str, float], wheels: list[str],

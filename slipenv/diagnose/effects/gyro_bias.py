@@ -24,6 +24,7 @@ from slipenv.diagnose.effects.base import (
 )
 from slipenv.diagnose.effects.world import WorldEdit
 from slipenv.diagnose.segments import Segments
+from slipenv.sensors.noise import SensorNoise
 
 
 @dataclass(frozen=True)
@@ -48,8 +49,9 @@ def bounds(seg: Segments) -> dict[str, Bound]:
 
 
 def apply(edit: WorldEdit, p: GyroBias) -> None:
-    edit.replace["sensor_noise"] = dataclasses.replace(edit.config.sensor_noise,
-                                                       gyro_bias_rad_s=p.bias_rad_s)
+    noise = edit.config.sensor_noise
+    assert isinstance(noise, SensorNoise)  # SlipEnvConfig keeps a spec, whatever it was given
+    edit.replace["sensor_noise"] = dataclasses.replace(noise, gyro_bias_rad_s=p.bias_rad_s)
 
 
 def draw(rng: np.random.Generator, ctx: DrawContext) -> Hidden:

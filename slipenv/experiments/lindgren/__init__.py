@@ -1,4 +1,4 @@
-"""Lindgren et al. §5 re-run in simulation (``slipenv reproduce lindgren``, issue #3).
+"""Lindgren et al. §5 re-run in simulation (``slipenv reproduce lindgren``).
 
 Lindgren, Hague, Probert Smith and Marchant, "Relating torque and slip in an odometric model
 for an autonomous agricultural vehicle": a 2WD farm vehicle's navigation EKF with a linear
@@ -10,7 +10,7 @@ Each drive of ``slipenv/FarmField-v0`` records its raw sensor frames (:mod:`.rec
 the EKF schemes run offline over the same frames (:mod:`.filters`), as in the paper; the
 statistics are in :mod:`.metrics`, the paper's numbers in :mod:`.paper`, the settings and
 why they have their values in :mod:`.settings`. Both experiments run in two blocks on the same
-paths and seeds: the headline, and a robust block (issue 16 item 7) in the curved Janosi/Okello
+paths and seeds: the headline, and a robust block in the curved Janosi/Okello
 world with the estimator's default soil random walk and a radius for the no-slip filter measured
 as the paper's operators did (:mod:`.calibration`). :func:`run` (:mod:`.experiment`) prints the
 paper-vs-simulation table (:mod:`.report`), saves the figures (:mod:`.plots`), the JSON and,

@@ -77,7 +77,7 @@ default to show its effect (the table's rows "with the estimator's ..."):
 ROBUST = """\
 ## Robustness: a world that is not the filter's model
 
-The headline leans on its setting (issue 16): the world injects Lindgren's linear torque/slip
+The headline leans on its setting: the world injects Lindgren's linear torque/slip
 law, the exact structure scheme 4 assumes; the soil random walk is cut to what a uniform
 field needs; and scheme 3 gets the concrete radius. The robust block (column "robust" in the
 table above; `ROBUST` in `slipenv/experiments/lindgren/settings.py`, `metrics.robust` in the
@@ -132,7 +132,7 @@ None of it is tuned away.
   rolling radii {R_true} m against the nominal {R_nom:.3f} m), so scheme 3 deviates more than in
   the paper and, after the cut, drifts differently from the paper's 1.97 m: the paper's no-slip
   run used "a carefully measured effective wheel radius", this one the concrete-calibrated
-  nominal radius, as issue #3 asks (the robust block above gives it a measured one).
+  nominal radius, as the headline targets ask (the robust block above gives it a measured one).
 - **Scheme 4's NIS** is {nis4:.2f}, {nis_where} the band {band_lo:.3f}-{band_hi:.3f} (paper
   3.18, above its band). The simulated encoders err only by quantisation (1/6 count² for a
   count difference, whose lag-1 autocorrelation is negative) while the filter keeps the
@@ -214,10 +214,10 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
         "## What is run", SETUP.format(**values),
         "## Paper against simulation",
         markdown_table(("quantity", "paper", "headline", "robust"), markdown_rows(m, paper)),
-        f"Targets of issue #3, headline ({met} of {len(result['targets'])} met):",
+        f"Targets, headline ({met} of {len(result['targets'])} met):",
         "\n".join(f"- {line}" for line in target_lines(result["targets"])),
         *([] if robust is None else [
-            f"Targets of issue #3, robust ("
+            f"Targets, robust ("
             f"{sum(t['met'] for t in result['targets_robust'].values())} of "
             f"{len(result['targets_robust'])} met):",
             "\n".join(f"- {line}" for line in target_lines(result["targets_robust"]))]),

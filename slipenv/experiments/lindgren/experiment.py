@@ -90,7 +90,7 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_lindgren",
 
     The headline block (:data:`~.settings.HEADLINE`) drives the world with the filter's own
     linear law and gives the filters the uniform-field settings; the robust block
-    (:data:`~.settings.ROBUST`, issue 16 item 7) drives the same paths with the same seeds and
+    (:data:`~.settings.ROBUST`) drives the same paths with the same seeds and
     beacons in the curved Janosi/Okello world, with the estimator's default soil random walk
     and a measured radius for the no-slip filter.
 

@@ -137,6 +137,8 @@ def dropout_experiment(path: Path, seeds: list[int], progress: bool = False,
     over the drives and list each one. ``setting`` and ``calibration`` go to
     :func:`~.recording.record`.
     """
+    if not seeds:
+        raise ValueError("dropout_experiment needs at least one seed")
     names = DROPOUT_FILTERS + tuple(setting.variants)
 
     def cut_factor(name: str) -> float:
@@ -144,7 +146,8 @@ def dropout_experiment(path: Path, seeds: list[int], progress: bool = False,
 
     per_run: dict[str, list] = {k: [] for k in names}
     heading: dict[str, list] = {k: [] for k in names}
-    first = None
+    first: tuple[Recording, dict[str, FilterRun],
+                 dict[str, tuple[np.ndarray, np.ndarray]]] | None = None
     for seed in iterate(seeds, progress, f"dropout drives, {setting.name}"):
         rec = record(path, seed, progress, setting, calibration)
         runs = {name: run_filter(rec, name, cut_s=CUT_S * cut_factor(name), inertial=False,
@@ -154,6 +157,7 @@ def dropout_experiment(path: Path, seeds: list[int], progress: bool = False,
         for name in names:
             per_run[name].append(float(errors[name][0][-1]))
             heading[name].append(float(np.degrees(abs(errors[name][1][-1, 2]))))
+    assert first is not None  # seeds is not empty
     rec, runs, errors = first
     metrics = {"final_error_m": {k: float(np.mean(v)) for k, v in per_run.items()},
                "final_error_m_per_drive": per_run,

@@ -20,6 +20,7 @@ import numpy as np
 from slipenv.contracts.frame import SensorFrame
 from slipenv.controllers.baseline import baseline_controller
 from slipenv.envs.estimation import default_k_s_prior, odometry_geometry
+from slipenv.envs.slip_env import SlipEnv
 from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.lindgren import LindgrenEKF, LindgrenNoise, OracleSoil
 from slipenv.paths import Path
@@ -86,15 +87,19 @@ class FrameRecorder:
         self.truth: list = []
         self.s_true_m: list[float] = []
         self._length_m = 0.0
+        self._path_name = ""
 
     def on_reset(self, env: gym.Env, obs: np.ndarray, info: dict) -> None:
-        self._length_m = env.unwrapped.path.length_m
+        base = env.unwrapped
+        if not isinstance(base, SlipEnv):
+            raise TypeError(f"FrameRecorder records a SlipEnv, got {type(base).__name__}")
+        self._length_m, self._path_name = base.path.length_m, base.path.name
         self.frames, self.truth, self.s_true_m = [info["sensors"]], [info["true_pose"]], [0.0]
 
     def on_step(self, env: gym.Env, action: np.ndarray, obs: np.ndarray, reward: float,
                 terminated: bool, truncated: bool, info: dict) -> None:
         if "sensors" not in info:  # physics blow-up: nothing recorded this step
-            raise RuntimeError(f"drive on {env.unwrapped.path.name} ended: "
+            raise RuntimeError(f"drive on {self._path_name} ended: "
                                f"{info.get('truncation_reason')}")
         self.frames.append(info["sensors"])
         self.truth.append(info["true_pose"])
@@ -128,6 +133,10 @@ def record(path: Path, seed: int, progress: bool = False, setting: Setting = HEA
                    max_episode_s=limit_s, max_episode_steps=int(limit_s * 20.0) + 1, **world)
     with contextlib.closing(env), quiet_estimator():  # steering EKF's skips: in its extras
         base = env.unwrapped
+        assert isinstance(base, SlipEnv)  # ENV_ID is a slipenv id
+        beacons_xy = base.beacons_xy
+        if beacons_xy is None:
+            raise ValueError(f"{ENV_ID} has no beacons: the Lindgren filters need them")
         rec = FrameRecorder()
         bar = step_bar(progress, base.max_steps, f"drive {path.name}")
         rollout(env, baseline_controller(env), seed=seed, recorders=[rec], progress=bar)
@@ -139,6 +148,6 @@ def record(path: Path, seed: int, progress: bool = False, setting: Setting = HEA
             truth=np.array(rec.truth), s_true_m=np.array(rec.s_true_m),
             oracle=base.true_soil(),
             params=LindgrenNoise(k_s0=default_k_s_prior(spec), **setting.noise),
-            geometry=odometry_geometry(spec), beacons_xy=base.beacons_xy,
+            geometry=odometry_geometry(spec), beacons_xy=beacons_xy,
             no_slip_radius_m=None if calibration is None else calibration["radius_m"],
             k_s_secant_nm=None if calibration is None else calibration["k_s_secant_nm"])

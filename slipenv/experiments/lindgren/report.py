@@ -1,7 +1,7 @@
-"""The paper-vs-simulation table of ``slipenv reproduce lindgren`` and the targets of issue #3.
+"""The paper-vs-simulation table of ``slipenv reproduce lindgren`` and its targets.
 
 The table has one column per block: the headline (the world with the filter's own linear law)
-and the robust block of issue 16 item 7.
+and the robust block (the curved Janosi/Okello world).
 
 :func:`table_rows` is the one source of the table; :func:`format_table` prints it,
 :func:`markdown_rows` feeds the results page (:mod:`.docs`).
@@ -24,7 +24,7 @@ def nis_distance(value: float | None, band: list) -> float | None:
 
 
 def targets(m: dict) -> dict[str, dict]:
-    """Issue #3's targets, each with its value, limit and whether the run met it."""
+    """The reproduction's targets, each with its value, limit and whether the run met it."""
     dev, nis_, drop = m["mean_deviation_m"], m["nis"], m["dropout_final_error_m"]
     rows = {
         "slip_model <= 0.3 no_slip_model": (drop["slip_model"], 0.3 * drop["no_slip_model"]),
@@ -123,8 +123,8 @@ def _g(value: float | None) -> str:
 
 def format_table(m: dict, paper: dict, tg: dict, run_time_s: float,
                  tg_robust: dict | None = None) -> str:
-    """Quantity | paper | headline | robust for Tables 1-3 and Fig. 7, then the targets of
-    issue #3 for each block."""
+    """Quantity | paper | headline | robust for Tables 1-3 and Fig. 7, then the targets for
+    each block."""
     rows = table_rows(m, paper)
     width = max(len(r[0]) for r in rows)
     lines = [f"{'quantity':<{width}}  {'paper':>12}  {'headline':>22}  {'robust':>22}",
@@ -134,7 +134,7 @@ def format_table(m: dict, paper: dict, tg: dict, run_time_s: float,
               for r in rows]
     for name, targets_ in (("headline", tg), ("robust", tg_robust)):
         if targets_ is not None:
-            lines.append(f"targets (issue #3), {name}:")
+            lines.append(f"targets, {name}:")
             lines += ["  " + line for line in target_lines(targets_)]
     lines.append(f"run time {run_time_s:.1f} s")
     return "\n".join(lines)

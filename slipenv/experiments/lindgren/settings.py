@@ -4,7 +4,7 @@ Each constant says why it has its value; departures from the estimator's default
 :data:`FILTER` and each is also run at the default (:data:`VARIANTS`) to show its effect. The
 experiment runs two blocks on the same paths and seeds (:class:`Setting`): :data:`HEADLINE`, the
 world with the filter's own linear law and the uniform-field settings, and :data:`ROBUST`
-(issue 16 item 7), which leans on none of them.
+which leans on none of them.
 """
 
 from __future__ import annotations
@@ -121,7 +121,7 @@ HEADLINE = Setting(
               # why scheme 4 trails the oracle after the cut: how long it had to learn R_w, k_s
               "scheme4_cut_x2": Variant("scheme4", cut_factor=2.0),
               "oracle_cut_x2": Variant("oracle", cut_factor=2.0)})
-# Issue 16 item 7: the curved Janosi/Okello law in the world (not the filter's linear one), the
+# The robust block: the curved Janosi/Okello law in the world (not the filter's linear one), the
 # estimator's default soil random walk, and a measured radius for the no-slip filter. Only the
 # paper's ungated bearing association is kept (it is the paper's method, not a property of the
 # simulated world).

@@ -1,5 +1,5 @@
 """Reina et al. re-run: FTrace's visual slip angle and sComp odometry on sand (``slipenv
-reproduce reina``, issue 13 item 8).
+reproduce reina``).
 
 Reina, Ishigami, Nagatani and Yoshida, "Odometry correction using visual slip angle estimation
 for planetary exploration rovers" (Advanced Robotics 24, 2010), §4: the rover driven straight at

@@ -81,7 +81,7 @@ DIFFERENCES = """\
 - **Camera.** The frame is rasterised from the true contact path (physics-notes §3, option A),
   with a fixed calibration error of up to ±0.75° per axis that reaches the angle directly.
 
-Targets (issue 13): sComp ≤ 0.3 × plain in both tests: {t_scomp}; slip-angle r.m.s. error
+Targets: sComp ≤ 0.3 × plain in both tests: {t_scomp}; slip-angle r.m.s. error
 ≤ 2°: {t_beta}; FTrace false negatives < 3 %: {t_fn}; misidentifications < 1 %: {t_mi};
 at least 1000 frames: {t_frames}.
 """

@@ -15,6 +15,8 @@ from dataclasses import dataclass, field
 import gymnasium as gym
 import numpy as np
 
+from slipenv.envs.slip_env import SlipEnv
+from slipenv.estimators.reina import FTraceSComp
 from slipenv.rollout import rollout
 
 from ..progress import step_bar
@@ -88,7 +90,16 @@ class DriveRecorder:
     def __init__(self, drive: Drive, keep_images_every: int) -> None:
         self.drive, self.keep_every = drive, max(int(keep_images_every), 1)
 
+    @staticmethod
+    def _estimator(env: gym.Env) -> FTraceSComp:
+        base = env.unwrapped
+        estimator = base.estimator if isinstance(base, SlipEnv) else None
+        if not isinstance(estimator, FTraceSComp):
+            raise TypeError("DriveRecorder records a SlipEnv that runs the scomp estimator")
+        return estimator
+
     def _truth(self, env: gym.Env, info: dict) -> None:
+        estimator = self._estimator(env)
         d = self.drive
         d.t_s.append(info["t_s"])
         d.true_xy.append(info["true_pose"][:2].copy())
@@ -96,10 +107,10 @@ class DriveRecorder:
         d.true_v_body.append(info["true_velocity_body_mps"].copy())
         d.true_beta.append(info["true_slip_angle_rad"])
         d.frames.append(info["sensors"])
-        d.beta_used.append(env.unwrapped.estimator.odometry.beta_rad)
+        d.beta_used.append(estimator.odometry.beta_rad)
         frame = info.get("trace_frame")
         if frame is not None:
-            det = env.unwrapped.estimator.last_detection
+            det = estimator.last_detection
             d.frame_t.append(frame.t_s)
             d.frame_present.append(frame.trace_present)
             d.frame_angle.append(frame.trace_angle_rad)
@@ -124,14 +135,16 @@ def drive(cfg: Settings, test: str, seed: int, progress: bool = False) -> Drive:
     steps = int(math.ceil(kwargs["max_episode_s"] * 20.0))  # the id's own limit is 60 s
     env = gym.make(ENV_ID, max_episode_steps=steps, **kwargs)
     try:
-        spec = env.unwrapped.vehicle
+        base = env.unwrapped
+        assert isinstance(base, SlipEnv)  # ENV_ID is a slipenv id
+        spec = base.vehicle
         policy = HeadingHold(cfg.speed_mps / spec.max_speed_mps, cfg.heading_gain,
                              spec.max_yaw_rate_rad_s)
-        out = Drive(test, seed, env.unwrapped.control_dt_s)
+        out = Drive(test, seed, base.control_dt_s)
         length = cfg.sideways_length_m if test == "sideways" else cfg.mounds_length_m
         n_frames = int(length / cfg.speed_mps * 5.0)
         rec = DriveRecorder(out, max(n_frames // max(cfg.frames_saved, 1), 1))
-        bar = step_bar(progress, env.unwrapped.max_steps, f"{test} seed {seed}")
+        bar = step_bar(progress, base.max_steps, f"{test} seed {seed}")
         rollout(env, policy, seed=seed, recorders=[rec], progress=bar)
         if bar is not None:
             bar.close()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import time
 from pathlib import Path as FsPath
+from typing import Any
 
 import numpy as np
 
@@ -17,7 +18,7 @@ from ..progress import iterate
 from ..results import publish
 from .analysis import drive_metrics, fit_slip_model, replay, rms, score_ftrace, windowed_truth
 from .docs import write_results_page
-from .drive import drive
+from .drive import Drive, drive
 from .paper import PAPER
 from .plots import save_figures
 from .report import format_table
@@ -52,15 +53,15 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_reina", json_path: s
     out = FsPath(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     plan = [(test, seed + i) for test in TESTS for i in range(cfg.seeds)]
-    drives = {test: [] for test in TESTS}
+    drives: dict[str, list[Drive]] = {test: [] for test in TESTS}
     for test, s in iterate(plan, progress, "reina drives"):
         drives[test].append(drive(cfg, test, s))
     truths = {t: [windowed_truth(d, geom, cfg.truth_window_s) for d in drives[t]]
               for t in TESTS}
     # Reina §4.3.1: s_x0, k (and β0) from test 1 against ground truth, reused on test 2.
     fit = fit_slip_model(drives["sideways"], truths["sideways"])
-    per_drive = {t: [] for t in TESTS}
-    odometries = {t: [] for t in TESTS}
+    per_drive: dict[str, list[dict]] = {t: [] for t in TESTS}
+    odometries: dict[str, list[dict]] = {t: [] for t in TESTS}
     for t in TESTS:
         for d, tr in zip(drives[t], truths[t], strict=True):
             odo = replay(d, geom, fit.model)
@@ -84,7 +85,7 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_reina", json_path: s
     final = {t: {k: float(np.mean([m["final_error_m"][k] for m in per_drive[t]]))
                  for k in ("plain", "compass", "scomp")} for t in TESTS}
     ftrace = score.as_dict()
-    metrics = {
+    metrics: dict[str, Any] = {
         "slip_angle_rms_deg": {t: math.degrees(rms(pooled(t, "beta_err"))) for t in TESTS},
         "slip_ratio_rms": {t: rms(pooled(t, "s_err")) for t in TESTS},
         "final_error_m": final,

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import math
+from typing import SupportsFloat
 
 
-def _f(x: object, digits: int = 3) -> str:
+def _f(x: SupportsFloat | None, digits: int = 3) -> str:
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return "-"
     if isinstance(x, bool):

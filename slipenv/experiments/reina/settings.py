@@ -1,4 +1,4 @@
-"""What ``slipenv reproduce reina`` runs (Reina §4.2-4.3) and its targets (issue 13)."""
+"""What ``slipenv reproduce reina`` runs (Reina §4.2-4.3) and its targets."""
 
 from __future__ import annotations
 

@@ -1,12 +1,12 @@
 """Yamauchi et al. re-run: slip-compensated odometry and slip-angle feed-forward on sand slopes
-(``slipenv reproduce yamauchi``, issue 4).
+(``slipenv reproduce yamauchi``).
 
 Yamauchi, Nagatani, Hashimoto and Fujino, "Slip compensated odometry for a tracked vehicle
 when rotating on a loose weak slope": track slip kinematics (Eq. 1-7), Endo's slip-ratio
 relation (Eq. 8), a slip-angle regression on roll, angular displacement and rotation radius
 (Eq. 9) and a path-following law with slip-angle feed-forward (§3, Eq. 9-10).
 
-By default the Wong-Chiang track model (``tracked_patako_wong_chiang``, issue 16) on a loose
+By default the Wong-Chiang track model (``tracked_patako_wong_chiang``) on a loose
 dry sand (``dry_sand``) repeats the paper's rotation runs
 (:mod:`.rotation`), identifies Endo's n and Eq. 9 from them (:mod:`.slips`), replays the
 odometries on held-out runs (:mod:`.odometry`) and drives the 15° circle with both laws

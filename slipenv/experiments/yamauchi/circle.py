@@ -9,12 +9,17 @@ env's observation by one built from the true-β odometry or from the truth.
 
 from __future__ import annotations
 
+from typing import Any
+
 import gymnasium as gym
 import numpy as np
 
+from slipenv.contracts import PoseEstimate
 from slipenv.contracts.observation import build_observation
 from slipenv.controllers.yamauchi import YamauchiController
 from slipenv.envs.estimation import odometry_geometry
+from slipenv.envs.slip_env import SlipEnv
+from slipenv.estimators.skid_steer import SlipCompensatedOdometry
 from slipenv.paths import circle
 from slipenv.rollout import TrajectoryRecorder, rollout
 
@@ -48,17 +53,21 @@ class LimitObservation(gym.Wrapper):
 
     def __init__(self, env: gym.Env, steer_on: str, n: float | None = None) -> None:
         super().__init__(env)
+        base = env.unwrapped
+        if not isinstance(base, SlipEnv):
+            raise TypeError(f"LimitObservation wraps a SlipEnv, got {type(base).__name__}")
+        self._base = base
         if steer_on not in STEER_ON[1:]:
             raise ValueError(f"steer_on must be one of {STEER_ON[1:]}, got {steer_on!r}")
         if steer_on == "true_beta" and n is None:
             raise ValueError("steer_on='true_beta' needs Endo's n")
         self.steer_on, self.n = steer_on, n
         self._oracle = TrueSlipAngle()
-        self._odometry = None
-        self._est = None
+        self._odometry: SlipCompensatedOdometry | None = None
+        self._est: PoseEstimate | None = None
 
     def _observe(self, info: dict) -> tuple[np.ndarray, dict]:
-        obs = limit_observation(self.env.unwrapped.path, info, self._est)
+        obs = limit_observation(self._base.path, info, self._est)
         pose = (info["true_pose"] if self._est is None
                 else (self._est.x_m, self._est.y_m, self._est.yaw_rad))
         return obs, {**info, "estimated_pose": np.asarray(pose, dtype=float)}
@@ -68,8 +77,9 @@ class LimitObservation(gym.Wrapper):
         self._oracle.beta_rad = 0.0
         self._odometry = self._est = None
         if self.steer_on == "true_beta":
+            assert self.n is not None  # __init__ refuses true_beta without n
             self._odometry = true_beta_odometry(
-                odometry_geometry(self.env.unwrapped.vehicle), self.n, self._oracle)
+                odometry_geometry(self._base.vehicle), self.n, self._oracle)
             self._est = self._odometry.reset(*info["true_pose"], info["sensors"])
         return self._observe(info)
 
@@ -100,6 +110,7 @@ def circle_episode(cfg: Settings, pole_rps: float, feedforward: bool, estimator:
     if steer_on != "observation":
         env = LimitObservation(env, steer_on, estimator_kwargs.get("n"))
     base = env.unwrapped
+    assert isinstance(base, SlipEnv)  # make_world makes a slipenv id
     policy = YamauchiController.from_poles(
         pole_rps, cfg.speed_mps, v_max_mps=base.vehicle.max_speed_mps,
         omega_max_rps=base.vehicle.max_yaw_rate_rad_s, dt_s=base.control_dt_s,
@@ -122,7 +133,7 @@ def mean_episodes(eps: list[dict]) -> dict:
     """Mean error, RMSE and max error [m] and the slip angle's swing [deg] averaged over laps;
     each lap's mean error; laps completed."""
     keys = ("mean_error_m", "rmse_m", "max_error_m", "slip_angle_swing_deg")
-    out = {k: float(np.mean([e[k] for e in eps])) for k in keys}
+    out: dict[str, Any] = {k: float(np.mean([e[k] for e in eps])) for k in keys}
     out["per_seed_mean_error_m"] = [e["mean_error_m"] for e in eps]
     out["completed"] = int(sum(e["completed"] for e in eps))
     return out

@@ -84,9 +84,9 @@ LIMITS = LIMITS_HEAD + """
   true slip angle of the turning vehicle swings by {swing:.0f}° (5-95 % range) around a lap,
   faster than the law follows.
 """ + EXTRAPOLATION + """
-Issue 16 traces these limits to the track model (per-wheel slip states with no shear build-up
-along the track, no bulldozing resistance) and builds that physics: the reproduction now runs
-on the Wong-Chiang track model on a loose dry sand by default
+These limits trace to the per-wheel track law (slip states with no shear build-up along the
+track, no bulldozing resistance), which is why the reproduction runs on the Wong-Chiang track
+model on a loose dry sand by default
 ([yamauchi_wong_chiang.md](yamauchi_wong_chiang.md)); this page is the env preset's world,
 `--vehicle tracked_patako --soil toyoura_sand`.
 """
@@ -124,7 +124,7 @@ VEHICLE_MODELS = {
         "Rankine side-wall (bulldozing) pressure with a berm that grows with the swept volume "
         "(`slipenv/terramechanics/track.py`, `slipenv/sim/track_soil.py`)"),
 }
-"""One sentence on each tracked vehicle's soil model (the track model of issue 16)."""
+"""One sentence on each tracked vehicle's soil model (per-wheel law or Wong-Chiang track)."""
 
 SOIL_NOTES = {
     "dry_sand": ("Wong's dry sand (LLL), a dry loose silica sand standing in for the paper's "
@@ -160,7 +160,7 @@ def world_details(vehicle: str | None, soil: str | None) -> str:
     if (v, s) == (DEFAULT_VEHICLE, DEFAULT_SOIL):
         return ""
     model = VEHICLE_MODELS.get(v)
-    opening = ("The reproduction's default world (issue 16); the same experiments in the env "
+    opening = ("The reproduction's default world; the same experiments in the env "
                "preset's world (per-wheel law on `toyoura_sand`) are on "
                "[yamauchi.md](yamauchi.md)" if (v, s) == (REPRODUCTION_VEHICLE, REPRODUCTION_SOIL)
                else "The same experiments as [yamauchi.md](yamauchi.md), with the world changed")
@@ -222,7 +222,8 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
         SETUP.format(**values),
         "## Paper against simulation",
         markdown_table(("quantity", "paper", "simulation"), markdown_rows(result)),
-        f"Targets (issue 4, and Endo's n of issue 16): {met} of {len(m['targets_met'])} met.",
+        f"Targets (the paper's odometry and circle results, and Endo's n): {met} of "
+        f"{len(m['targets_met'])} met.",
         (LIMITS if default else LIMITS_MEASURED).format(**values),
         "## Figures", figure_list(figures, CAPTIONS),
     ]

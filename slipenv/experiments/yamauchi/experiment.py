@@ -19,7 +19,7 @@ from . import model_file
 from .circle import circle_episode, mean_episodes
 from .docs import world_options, write_results_page
 from .odometry import odometry_errors
-from .paper import PAPER
+from .paper import ENDO_N, PAPER
 from .plots import save_figures
 from .report import format_table
 from .rotation import collect_runs, split_runs
@@ -169,7 +169,7 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
         tracked env observes in.
     settings : Settings, optional
         Overrides ``quick``. By default :data:`~.settings.FULL` or :data:`~.settings.QUICK`,
-        the Wong-Chiang track model on ``dry_sand`` (issue 16); ``vehicle=None, soil=None``
+        the Wong-Chiang track model on ``dry_sand``; ``vehicle=None, soil=None``
         (``Settings()``) is the env preset's per-wheel world.
     docs_dir : str, optional
         Write the results page ``docs_dir/yamauchi.md`` (figures copied beside it); in
@@ -231,7 +231,7 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
         "path_following": following,
         "limits": limits,
     }
-    n_paper = PAPER["endo_n"]
+    n_paper = ENDO_N
     metrics["targets_met"] = {
         "endo_n_within_0.05_paper_at_each_tilt": all(
             abs(f.n - n_paper[f"{t:g}"]) <= TARGETS["endo_n_tolerance"] for t, f in fits.items()

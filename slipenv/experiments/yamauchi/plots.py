@@ -15,7 +15,7 @@ from slipenv.estimators.skid_steer import EndoOdometry, SlipCompensatedOdometry
 from slipenv.paths import circle
 
 from .odometry import replay
-from .paper import PAPER
+from .paper import ENDO_N
 from .slips import slip_run
 
 
@@ -43,7 +43,7 @@ def save_figures(out: FsPath, cfg, geom, fits, samples, main, episodes, n_by_til
         ax.plot(x[ok][::3], y[ok][::3], ".", ms=2, color=f"C{i}", alpha=0.4)
         xs = np.linspace(0.0, np.nanmax(np.abs(x[ok])), 10)
         ax.plot(xs, fit.n * xs, color=f"C{i}", label=f"{tilt:g}°: n = {fit.n:.3f} "
-                f"(paper {PAPER['endo_n'][f'{tilt:g}']})")
+                f"(paper {ENDO_N[f'{tilt:g}']})")
     ax.set_xlabel("log |v_r / v_l|")
     ax.set_ylabel("log |α_l / α_r|")
     ax.set_title("Fig. 4: Endo's n per tilt")

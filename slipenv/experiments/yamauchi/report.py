@@ -2,7 +2,7 @@
 
 :func:`table_rows` is the one source of the table: :func:`format_table` prints it, the results
 page (:mod:`.docs`) renders the same rows in Markdown. Rows whose label starts with
-``limit:`` are measured limits, ``target:`` rows the targets of issue 4.
+``limit:`` are measured limits, ``target:`` rows the reproduction's targets.
 """
 
 from __future__ import annotations

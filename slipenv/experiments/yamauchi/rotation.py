@@ -15,6 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 from slipenv.contracts import wrap_angle
+from slipenv.envs.slip_env import SlipEnv
 from slipenv.estimators.skid_steer.identification import train_test_split_runs
 from slipenv.paths import straight
 from slipenv.rollout import rollout
@@ -116,7 +117,9 @@ def rotation_run(cfg: Settings, tilt_deg: float, rate_dps: float, direction: int
     env = make_world(tilt_deg, cfg.soil, cfg.vehicle,
                      path=straight(5.0, cfg.speed_mps, heading_rad),
                      estimator="gyrodometry", estimator_kwargs={}, max_cross_track_m=10.0)
-    spec, dt_s = env.unwrapped.vehicle, env.unwrapped.control_dt_s
+    base = env.unwrapped
+    assert isinstance(base, SlipEnv)  # make_world makes a slipenv id
+    spec, dt_s = base.vehicle, base.control_dt_s
     action = np.array([cfg.speed_mps / spec.max_speed_mps,
                        direction * math.radians(rate_dps) / spec.max_yaw_rate_rad_s],
                       dtype=np.float32)

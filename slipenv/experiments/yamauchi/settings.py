@@ -7,11 +7,11 @@ from dataclasses import dataclass
 ENV_ID = "slipenv/TrackedSlopeCircle-v0"
 DEFAULT_VEHICLE = "tracked_patako"  # the env preset's world (per-wheel track law) ...
 DEFAULT_SOIL = "toyoura_sand"  # ... on the LETE constants of the paper's Toyoura sand
-REPRODUCTION_VEHICLE = "tracked_patako_wong_chiang"  # the reproduction's world (issue 16):
+REPRODUCTION_VEHICLE = "tracked_patako_wong_chiang"  # the reproduction's world:
 REPRODUCTION_SOIL = "dry_sand"  # the Wong-Chiang track model on a sourced loose dry sand
 ORACLE_MAX_SLIP_ANGLE_RAD = 1.5  # [rad] the true β is not clipped like a regression's (1 rad)
-TARGETS = {"odometry_ratio_max": 0.4, "feedforward_ratio_max": 0.5,  # issue 4
-           "endo_n_tolerance": 0.05}  # issue 16: |n - paper| at each tilt
+TARGETS = {"odometry_ratio_max": 0.4, "feedforward_ratio_max": 0.5,  # paper: 0.18, 0.14
+           "endo_n_tolerance": 0.05}  # |n - paper| at each tilt
 STEER_ON = ("observation", "true_beta", "truth")
 """What a circle episode steers on: the env's observation (what a user gets); slip-compensated
 odometry with the true β in place of Eq. 9 (a limit: perfect slip-angle regression, Endo's
@@ -41,7 +41,7 @@ class Settings:
     circle_seeds: int = 5  # §3.1 ran each law three times
     poles_rps: tuple[float, ...] = (0.15, 0.25, 0.4, 0.6, 1.0)  # rigid-ground gain search
     # The world: None keeps the env preset's (tracked_patako, per-wheel law, toyoura_sand);
-    # "tracked_patako_wong_chiang" and "dry_sand" run the Wong-Chiang track model (issue 16),
+    # "tracked_patako_wong_chiang" and "dry_sand" run the Wong-Chiang track model,
     # the world of the command's plans FULL and QUICK.
     vehicle: str | None = None
     soil: str | None = None
@@ -77,7 +77,7 @@ def world_of(vehicle: str | None, soil: str | None) -> tuple[str, str]:
 
 def page_name(vehicle: str | None, soil: str | None) -> str:
     """The results page of a world: ``yamauchi`` for the env preset's, ``yamauchi_wong_chiang``
-    for the Wong-Chiang track model on ``dry_sand`` (issue 16, the reproduction's default),
+    for the Wong-Chiang track model on ``dry_sand`` (the reproduction's default),
     else ``yamauchi_<vehicle>_<soil>`` with the preset's name left out when it is kept."""
     v, s = world_of(vehicle, soil)
     if (v, s) == (DEFAULT_VEHICLE, DEFAULT_SOIL):

@@ -11,7 +11,7 @@ def make_world(tilt_deg: float, soil: str | None = None, vehicle: str | None = N
                **kwargs) -> gym.Env:
     """``slipenv/TrackedSlopeCircle-v0`` on a slope of ``tilt_deg`` [deg] (downhill -y), or on
     flat ground at 0°; ``soil`` and ``vehicle`` (names) replace the preset's when given (e.g.
-    ``dry_sand`` and ``tracked_patako_wong_chiang``, the Wong-Chiang track model of issue 16);
+    ``dry_sand`` and ``tracked_patako_wong_chiang``, the Wong-Chiang track model);
     ``kwargs`` override further preset fields."""
     terrain = ({"kind": "slope", "slope_deg": float(tilt_deg), "downhill_azimuth_deg": -90.0}
                if tilt_deg > 0.0 else "flat")
