@@ -113,15 +113,47 @@ static void inputs_free(Inputs *in)
     PyMem_Free(in->rate);
 }
 
-/* Bit-for-bit equality of two readings (memcmp: a -0.0 or a NaN pattern counts). */
-static int inputs_equal(const Inputs *a, const Inputs *b, int n, int n_spin)
+/* The first difference between two readings in what the loop acts on, described in `what`
+ * (e.g. "contact patch of wheel 2"), or 0 if they agree bit for bit (memcmp: a -0.0 or a NaN
+ * pattern counts). A wheel's patch sums are compared only where it has a patch: for a wheel
+ * without one, clear_patches leaves the sums of the last substep on which that buffer saw it
+ * in contact, and the loop never reads them (no load). `in` is refilled on every substep but
+ * `check` only on compared ones, so a wheel that touched the ground between two comparisons
+ * and is off it at the second (a rover rocking over a heightfield) holds leftovers of different
+ * substeps in the two: they would differ though every value the loop uses agrees. Where a
+ * patch exists its sums must agree bit for bit, not as a set of points: both readings sum the
+ * same server reply in the order it lists the points. Link states and spin rates are read
+ * afresh for every wheel on every substep, so all of them are compared. */
+static int inputs_differ(const Inputs *a, const Inputs *b, int n, int n_spin, char *what,
+                         size_t size)
 {
-    return a->chassis == b->chassis
-           && memcmp(a->load, b->load, n * sizeof(double)) == 0
-           && memcmp(a->has_patch, b->has_patch, n * sizeof(int)) == 0
-           && memcmp(a->patch, b->patch, 6 * n * sizeof(double)) == 0
-           && memcmp(a->link, b->link, LINK_WIDTH * n * sizeof(double)) == 0
-           && memcmp(a->rate, b->rate, n_spin * sizeof(double)) == 0;
+    if (a->chassis != b->chassis) {
+        PyOS_snprintf(what, size, "chassis contact");
+        return 1;
+    }
+    for (int k = 0; k < n; k++) {
+        const char *field = NULL;
+        if (a->has_patch[k] != b->has_patch[k])
+            field = "contact";
+        else if (memcmp(&a->load[k], &b->load[k], sizeof(double)) != 0)
+            field = "load";
+        else if (a->has_patch[k]
+                 && memcmp(&a->patch[6 * k], &b->patch[6 * k], 6 * sizeof(double)) != 0)
+            field = "contact patch";
+        else if (memcmp(&a->link[LINK_WIDTH * k], &b->link[LINK_WIDTH * k],
+                        LINK_WIDTH * sizeof(double)) != 0)
+            field = "link state";
+        if (field != NULL) {
+            PyOS_snprintf(what, size, "%s of wheel %d", field, k);
+            return 1;
+        }
+    }
+    for (int j = 0; j < n_spin; j++)
+        if (memcmp(&a->rate[j], &b->rate[j], sizeof(double)) != 0) {
+            PyOS_snprintf(what, size, "rate of spin joint %d", j);
+            return 1;
+        }
+    return 0;
 }
 
 static void loop_dealloc(WheelLoop *self)
@@ -615,12 +647,12 @@ static int native_fallback(WheelLoop *self, const char *why)
 }
 
 /* This substep's readings into self->in: natively once verified, else through the Python
- * API. The native readings are compared with the Python API's bit for bit on every substep up
- * to the first with a wheel on the ground, then on every verify_every-th substep with contact;
- * the guard regions after the structs pybullet filled are checked on every substep. A failed
- * check switches the loop to the Python API for good (native_fallback). Returns the native
- * client handle to apply the forces through, or NULL for the Python API (check
- * PyErr_Occurred). */
+ * API. The native readings are compared with the Python API's bit for bit (inputs_differ) on
+ * every substep up to the first with a wheel on the ground, then on every verify_every-th
+ * substep with contact; the guard regions after the structs pybullet filled are checked on
+ * every substep. A failed check switches the loop to the Python API for good
+ * (native_fallback). Returns the native client handle to apply the forces through, or NULL for
+ * the Python API (check PyErr_Occurred). */
 static b3Handle acquire(WheelLoop *self)
 {
     if (!self->native) {
@@ -651,13 +683,14 @@ static b3Handle acquire(WheelLoop *self)
     if (acquire_python(self, &self->check) < 0)
         return NULL;
     self->verifications += 1;
-    char why[160];
+    char why[160], what[64];
     if (broken != NULL)
         PyOS_snprintf(why, sizeof why, "the guard region after %s was overwritten", broken);
     else if (failed)
         PyOS_snprintf(why, sizeof why, "a native query failed where the Python API's did not");
-    else if (!inputs_equal(&self->in, &self->check, self->n, self->n_spin))
-        PyOS_snprintf(why, sizeof why, "the native readings differ from the Python API's");
+    else if (inputs_differ(&self->in, &self->check, self->n, self->n_spin, what, sizeof what))
+        PyOS_snprintf(why, sizeof why, "the native readings differ from the Python API's: %s",
+                      what);
     else {
         if (contact)
             self->verify = 0;

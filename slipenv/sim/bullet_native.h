@@ -14,11 +14,12 @@
  * layout that does not match all the same: every struct pybullet fills lives on the heap,
  * followed by a guard region of BULLET_GUARD_BYTES canary bytes checked after each substep's
  * calls (a larger struct in pybullet writes into it); and the loop compares its native readings
- * with the Python API's bit for bit until the first substep with contact, then on every
- * verify_every-th substep with contact. Either check failing switches the loop to the Python
- * API (WheelLoop.native_mismatch). pybullet's array of contact points is read in place with
- * the mirror's stride, so a b3ContactPointData of another size shows in the readings, where
- * the comparisons catch it.
+ * with the Python API's bit for bit, in every value it acts on (inputs_differ in
+ * _wheel_loop.c), until the first substep with contact, then on every verify_every-th substep
+ * with contact. Either check failing switches the loop to the Python API
+ * (WheelLoop.native_mismatch). pybullet's array of contact points is read in place with the
+ * mirror's stride, so a b3ContactPointData of another size shows in the readings, where the
+ * comparisons catch it.
  */
 #ifndef SLIPENV_BULLET_NATIVE_H
 #define SLIPENV_BULLET_NATIVE_H

@@ -15,7 +15,8 @@ magic number bullet3 raises whenever it changes those structs incompatibly) is t
 on any other build it reads through the Python API and `client_table` warns once, naming the
 version. On a listed build three guards stay on (``bullet_native.h``): each struct pybullet
 fills is followed by a canary region checked after every substep; the native readings are
-compared with the Python API's bit for bit on the first substep with contact and then on every
+compared with the Python API's bit for bit, in every value the loop acts on (a wheel without
+contact has no contact patch to compare), on the first substep with contact and then on every
 `VERIFY_EVERY`-th substep with contact. A failed check switches that loop to the Python API for
 good (``WheelLoop.native_mismatch``) and warns once (`NativeReaderWarning`).
 

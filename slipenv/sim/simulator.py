@@ -124,9 +124,6 @@ class Simulator:
                 f"({control_hz})"
             )
         self.multi_pass = multi_pass
-        if not isinstance(castor_own_geometry, bool):
-            raise ValueError("castor_own_geometry must be True or False, got "
-                             f"{castor_own_geometry!r}")
         self.castor_own_geometry = castor_own_geometry
         self.spec = vehicle
         self.substeps = int(round(ratio))

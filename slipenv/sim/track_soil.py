@@ -41,15 +41,14 @@ import numpy as np
 from slipenv.contracts.constants import G_MPS2
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.wheel_soil import WheelContactState
+from slipenv.terramechanics.bekker import compaction_resistance_n, pressure_sinkage_m
 from slipenv.terramechanics.models import ForceModel
 from slipenv.terramechanics.soil import SoilParams
 from slipenv.terramechanics.soil_map import SoilMap, UniformSoil, soil_rows
 from slipenv.terramechanics.track import (
     advance_shear,
     advance_wall,
-    bekker_sinkage_m,
     cell_forces,
-    compaction_resistance_n,
     load_spread_matrix,
     rut_resistance_n,
     sliding_velocity,
@@ -341,7 +340,7 @@ class TrackSoilInjector:
         pressure = (self.spread_all @ load).reshape(nt, n_cells)  # cell loads
         pressure *= self._inv_area
         slip = self._slip(u_list, vx_list)
-        z = bekker_sinkage_m(pressure, width, self._kc, self._kphi, self._n)
+        z = pressure_sinkage_m(pressure, width, self._kc, self._kphi, self._n)
         z *= slip_sinkage_factor(slip)[:, None]
         if self._rigid_tracks:
             z *= self._deform[:, None]  # no sinkage on rigid ground

@@ -15,6 +15,8 @@ the load, R_c = gamma W^e, which is how the force models evaluate them per physi
 On non-deformable ground there is no rut and R_c = 0. All functions broadcast, except the
 float ones the simulation calls per wheel (`wheel_sinkage_float_m`, `rut_following_compaction_n`,
 `rut_load_ratio`), whose one implementation is C (``_laws.h``, which the substep loop runs).
+`pressure_sinkage_m` and `compaction_resistance_n` take floats or numpy arrays as they are,
+without conversions: the track model (`track`) evaluates them on its cells every substep.
 
 Multi-pass (`rut_following_compaction_n`). Soil unloaded and reloaded follows a steep, nearly
 elastic line up to the maximum pressure it has already carried, and the virgin
@@ -40,6 +42,7 @@ from slipenv.terramechanics.vectorize import array_law
 
 __all__ = [
     "wheel_sinkage_m",
+    "pressure_sinkage_m",
     "track_sinkage_m",
     "compaction_resistance_n",
     "wheel_compaction_law",
@@ -47,12 +50,6 @@ __all__ = [
     "rut_following_compaction_n",
     "rut_load_ratio",
 ]
-
-
-def _clamped_load(load_n: ArrayLike) -> np.ndarray:
-    return np.maximum(np.asarray(load_n, dtype=float), 0.0)
-
-
 
 
 def wheel_sinkage_float_m(load_n: float, width_m: float, diameter_m: float, k_c: float,
@@ -82,40 +79,68 @@ k_c, k_phi, n_exp : array_like
 """)
 
 
+def pressure_sinkage_m(pressure_pa: float | np.ndarray, width_m: float | np.ndarray,
+                       k_c: float | np.ndarray, k_phi: float | np.ndarray,
+                       n_exp: float | np.ndarray) -> float | np.ndarray:
+    """Sinkage z = (p/(k_c/b + k_phi))^(1/n) [m] under a uniform pressure p on a contact of
+    width b: Bekker's pressure-sinkage law p = (k_c/b + k_phi) z^n solved for z (Wong Ch. 2).
+
+    Negative pressures count as 0. Floats or numpy arrays (broadcast), without conversions:
+    the track model calls it on its cells at every physics substep, where each conversion
+    costs more than the arithmetic.
+
+    Parameters
+    ----------
+    pressure_pa : float or ndarray
+        Pressure p [Pa].
+    width_m : float or ndarray
+        Width b [m] of the track (k_c is per unit width).
+    k_c, k_phi, n_exp : float or ndarray
+        Bekker moduli and exponent (n > 0).
+    """
+    return (np.maximum(pressure_pa, 0.0) * (1.0 / (k_c / width_m + k_phi))) ** (1.0 / n_exp)
+
+
 def track_sinkage_m(load_n: ArrayLike, width_m: ArrayLike, length_m: ArrayLike,
                     k_c: ArrayLike, k_phi: ArrayLike, n_exp: ArrayLike) -> np.ndarray:
     """Sinkage z [m] of a track (or track segment) under uniform pressure W/(b L) (Bekker).
 
+    `pressure_sinkage_m` at p = W/(b L), on any array_like.
+
     Parameters
     ----------
     load_n : array_like
-        Load W [N] carried by the contact length L.
+        Load W [N] carried by the contact length L; negative loads count as 0.
     width_m, length_m : array_like
         Track width b and contact length L [m].
     k_c, k_phi, n_exp : array_like
         Bekker moduli and exponent (n > 0).
     """
     width = np.asarray(width_m, dtype=float)
-    pressure = _clamped_load(load_n) / (width * length_m)
-    return (pressure / (np.asarray(k_c) / width + k_phi)) ** (1.0 / np.asarray(n_exp))
+    pressure = np.asarray(load_n, dtype=float) / (width * np.asarray(length_m))
+    return np.asarray(pressure_sinkage_m(pressure, width, np.asarray(k_c), np.asarray(k_phi),
+                                         np.asarray(n_exp, dtype=float)))
 
 
-def compaction_resistance_n(sinkage_m: ArrayLike, width_m: ArrayLike, k_c: ArrayLike,
-                            k_phi: ArrayLike, n_exp: ArrayLike) -> np.ndarray:
-    """Compaction resistance R_c = b (k_c/b + k_phi) z^(n+1)/(n+1) [N] (Bekker; Wong Ch. 5).
+def compaction_resistance_n(sinkage_m: float | np.ndarray, width_m: float | np.ndarray,
+                            k_c: float | np.ndarray, k_phi: float | np.ndarray,
+                            n_exp: float | np.ndarray) -> float | np.ndarray:
+    """Compaction resistance R_c = b (k_c/b + k_phi) z^(n+1)/(n+1) [N] (Bekker; Wong Ch. 2, 5):
+    the work of pressing a rut of depth z, b int_0^z p dz, per unit distance travelled.
+
+    Negative sinkage counts as 0. Floats or numpy arrays (broadcast), without conversions, as
+    `pressure_sinkage_m` (the track model evaluates it every substep).
 
     Parameters
     ----------
-    sinkage_m : array_like
+    sinkage_m : float or ndarray
         Rut depth z [m].
-    width_m : array_like
+    width_m : float or ndarray
         Width b [m] of the wheel or track.
-    k_c, k_phi, n_exp : array_like
+    k_c, k_phi, n_exp : float or ndarray
         Bekker moduli and exponent.
     """
-    n1 = np.asarray(n_exp, dtype=float) + 1.0
-    k_eq_b = np.asarray(k_c) + np.asarray(width_m) * k_phi
-    return k_eq_b * np.asarray(sinkage_m) ** n1 / n1
+    return ((k_c + width_m * k_phi) / (n_exp + 1.0)) * np.maximum(sinkage_m, 0.0) ** (n_exp + 1.0)
 
 
 def wheel_compaction_law(width_m: float, diameter_m: float, k_c: ArrayLike, k_phi: ArrayLike,

@@ -11,21 +11,25 @@ which is Okello's curve C_T = A[1 - (B/s)(1 - e^{-s/B})] (Lindgren Eq. 18-20) wi
 F_max = A c + W tan phi and shape B = K/L.
 
 `janosi_forces` is the combined-slip force law the simulation injects, in plain floats (it is
-called per wheel and per physics substep); `okello_secant` is its curve's shape on arrays, derived
-from the same scalar code. The other functions broadcast over numpy arrays.
+called per wheel and per physics substep); its one implementation is C (``_laws.h``, which the
+substep loop runs). `okello_secant` is its curve's shape on arrays, derived from the same C
+function (``okello_h``). `shear_strength_pa` and `janosi_stress_pa`, the local stress law, take
+floats or numpy arrays as they are (the track model evaluates them on its cells every
+substep); the other functions broadcast over any array_like.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numpy.typing import ArrayLike
 
+import slipenv.terramechanics._laws as _laws
 from slipenv.terramechanics.vectorize import array_law
 
 __all__ = [
     "janosi_forces",
+    "shear_strength_pa",
+    "janosi_stress_pa",
     "mohr_coulomb_strength_pa",
     "janosi_shear_stress_pa",
     "okello_secant",
@@ -35,15 +39,51 @@ __all__ = [
     "small_slip_stiffness",
 ]
 
-# Below this argument okello_secant switches from its closed form, which loses ~4 eps/x to
-# cancellation, to the clamped form plus its first-order Taylor correction (error < X^2/24).
-_X_SMALL = 1e-5
-_SIXTH = 1.0 / 6.0
+
+def shear_strength_pa(pressure_pa: float | np.ndarray, cohesion_pa: float | np.ndarray,
+                      tan_phi: float | np.ndarray) -> float | np.ndarray:
+    """Mohr-Coulomb shear strength tau_max = c + p tan phi [Pa] (Wong Eq. 2.54; Lindgren Eq. 3).
+
+    Floats or numpy arrays (broadcast), without conversions: the track model calls it on its
+    cells at every physics substep (`track.cell_forces`), where each conversion costs more
+    than the arithmetic.
+
+    Parameters
+    ----------
+    pressure_pa : float or ndarray
+        Normal stress p [Pa].
+    cohesion_pa : float or ndarray
+        Cohesion c [Pa].
+    tan_phi : float or ndarray
+        tan of the internal friction angle phi [-].
+    """
+    return pressure_pa * tan_phi + cohesion_pa
+
+
+def janosi_stress_pa(j_abs_m: float | np.ndarray, strength_pa: float | np.ndarray,
+                     shear_modulus_m: float | np.ndarray) -> float | np.ndarray:
+    """Janosi-Hanamoto shear stress tau = tau_max (1 - e^{-|j|/K}) [Pa] (Wong Eq. 2.56;
+    Lindgren Eq. 2), of the magnitude |j| >= 0 of the shear displacement.
+
+    Floats or numpy arrays (broadcast), without conversions, as `shear_strength_pa`.
+
+    Parameters
+    ----------
+    j_abs_m : float or ndarray
+        |j| [m].
+    strength_pa : float or ndarray
+        Mohr-Coulomb strength tau_max [Pa] (`shear_strength_pa`).
+    shear_modulus_m : float or ndarray
+        Shear deformation modulus K [m].
+    """
+    return -(strength_pa * np.expm1(j_abs_m * (-1.0 / shear_modulus_m)))
 
 
 def mohr_coulomb_strength_pa(normal_stress_pa: ArrayLike, cohesion_pa: ArrayLike,
                              friction_angle_rad: ArrayLike) -> np.ndarray:
     """Maximum soil shear strength q_max = c + sigma tan(phi) [Pa] (Lindgren Eq. 3).
+
+    `shear_strength_pa` of the friction angle, on any array_like.
 
     Parameters
     ----------
@@ -54,14 +94,16 @@ def mohr_coulomb_strength_pa(normal_stress_pa: ArrayLike, cohesion_pa: ArrayLike
     friction_angle_rad : array_like
         Internal friction angle phi [rad].
     """
-    return np.asarray(cohesion_pa) + np.asarray(normal_stress_pa) * np.tan(friction_angle_rad)
+    return np.asarray(shear_strength_pa(np.asarray(normal_stress_pa, dtype=float),
+                                        np.asarray(cohesion_pa), np.tan(friction_angle_rad)))
 
 
 def janosi_shear_stress_pa(shear_displacement_m: ArrayLike, max_shear_stress_pa: ArrayLike,
                            shear_modulus_m: ArrayLike) -> np.ndarray:
     """Janosi-Hanamoto shear stress q = q_max (1 - e^{-j/K}) [Pa] (Lindgren Eq. 2).
 
-    Odd in j: a shear displacement in the opposite direction gives the opposite stress.
+    `janosi_stress_pa` extended as an odd function of j: a shear displacement in the opposite
+    direction gives the opposite stress. Takes any array_like.
 
     Parameters
     ----------
@@ -73,21 +115,24 @@ def janosi_shear_stress_pa(shear_displacement_m: ArrayLike, max_shear_stress_pa:
         Shear deformation modulus K [m].
     """
     j = np.asarray(shear_displacement_m, dtype=float)
-    return -np.sign(j) * np.asarray(max_shear_stress_pa) * np.expm1(-np.abs(j) / shear_modulus_m)
+    return np.sign(j) * janosi_stress_pa(np.abs(j), np.asarray(max_shear_stress_pa),
+                                         np.asarray(shear_modulus_m, dtype=float))
 
 
 def _okello_h(x: float) -> float:
-    """h(x) of `okello_secant` for one float x >= 0 (the text the array version is derived from)."""
-    xc = x if x > _X_SMALL else _X_SMALL
-    return (math.expm1(-xc) + xc) / (xc * xc) + (xc - x) * _SIXTH  # h'(0) = -1/6 where clamped
+    """h(x) of `okello_secant` for one float x >= 0 (``_laws.h``, which the array version and
+    `janosi_forces` evaluate)."""
+    return _laws.okello_h(x)
 
 
 okello_secant = array_law(_okello_h, name="okello_secant", doc="""\
 Secant slope h(x) = g(x)/x = (x - 1 + e^{-x})/x^2 of Okello's normalised curve, x >= 0.
 
 g(x) = 1 - (1 - e^{-x})/x is the bracket of Lindgren Eq. 18 at x = s/B, so the thrust is
-F = F_max x h(x). h(0) = 1/2 (the limit of Lindgren Eq. 23); there is no 0/0 anywhere.
-Relative error below 1e-10 for all x >= 0. Takes and returns arrays (0-d for a scalar).
+F = F_max x h(x). h(0) = 1/2 (the limit of Lindgren Eq. 23); there is no 0/0 anywhere: below
+x = 1e-5 the closed form, which loses ~4 eps/x to cancellation, gives way to its value at 1e-5
+plus the first-order Taylor term h'(0) = -1/6 (error < x^2/24). Relative error below 1e-10 for
+all x >= 0. Takes and returns arrays (0-d for a scalar).
 """)
 
 
@@ -137,12 +182,8 @@ def janosi_forces(slip: float, tan_beta: float, load_n: float, cohesion_force_n:
     fx_n, fy_n : float
         fx with the sign of s; fy opposing the lateral sliding, sign(fy) = -sign(tan_beta).
     """
-    if load_n <= 0.0:
-        return 0.0, 0.0
-    f_max = load_n * tan_phi + cohesion_force_n
-    lateral = tan_beta * lateral_ratio
-    secant = f_max * _okello_h(math.hypot(slip, lateral) * shear_ratio) * shear_ratio
-    return secant * slip, -secant * lateral
+    return _laws.janosi_forces(slip, tan_beta, load_n, cohesion_force_n, tan_phi, shear_ratio,
+                               lateral_ratio)
 
 
 def okello_traction(slip: ArrayLike, amplitude: ArrayLike, shape_b: ArrayLike) -> np.ndarray:

@@ -7,15 +7,17 @@ on concrete, Lindgren Sec. 3.2) the measured slip s_m is off, and the torque/sli
 s_m no longer passes through the origin (Eq. 25-31).
 
 `linear_slip_forces` is the combined-slip form of the linear law that the simulation injects, in
-plain floats (called per wheel and per physics substep); the other functions broadcast.
+plain floats (called per wheel and per physics substep); its one implementation is C
+(``_laws.h``, which the substep loop runs, there also with lateral anisotropy). The other
+functions broadcast.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numpy.typing import ArrayLike
+
+import slipenv.terramechanics._laws as _laws
 
 __all__ = [
     "linear_slip_forces",
@@ -73,13 +75,8 @@ def linear_slip_forces(slip: float, tan_beta: float, load_n: float, cohesion_for
     fx_n, fy_n : float
         fx with the sign of s; fy opposing the lateral sliding.
     """
-    if load_n <= 0.0:
-        return 0.0, 0.0
-    half_ratio = 0.5 * shear_ratio  # 1/(2B)
-    excess = math.hypot(slip, tan_beta) * half_ratio  # sigma/(2B): saturated beyond 1
-    secant = (load_n * tan_phi + cohesion_force_n) * half_ratio / (excess if excess > 1.0
-                                                                     else 1.0)
-    return secant * slip, -secant * tan_beta
+    return _laws.linear_slip_forces(slip, tan_beta, load_n, cohesion_force_n, tan_phi,
+                                    shear_ratio, 1.0)
 
 
 def slip_from_speeds(ground_speed_mps: ArrayLike, wheel_rate_rad_s: ArrayLike,

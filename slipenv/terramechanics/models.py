@@ -144,6 +144,18 @@ class _PatchModel(ABC):
                 float(np.tan(soil.friction_angle_rad)),
                 float(g.shear_length_m / np.asarray(soil.shear_modulus_m, dtype=float)))
 
+    def _shear_law_forces(
+            self, soil: SoilParams, law: Callable[..., tuple[float, float]],
+    ) -> Callable[[float, float, float], tuple[float, float]]:
+        """`law`, a patch shear law of ``_laws`` (``(slip, tan_beta, load_n, A c, tan phi, L/K,
+        kappa) -> (fx, fy)``), bound to `soil`'s `_patch_constants` and the model's kappa."""
+        ac, tan_phi, ratio = self._patch_constants(soil)
+        kappa = self.lateral_stiffness_ratio
+
+        def forces(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
+            return law(slip, tan_beta, load_n, ac, tan_phi, ratio, kappa)
+        return forces
+
     def _compaction(self, soil: SoilParams) -> tuple[float, float]:
         """(gamma, e) of the Bekker compaction resistance gamma W^e of this contact (`bekker`)."""
         g = self.geometry
@@ -270,12 +282,7 @@ class JanosiForceModel(_PatchModel):
     _COMPILED_KIND = 0
 
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
-        ac, tan_phi, ratio = self._patch_constants(soil)
-        kappa, law = self.lateral_stiffness_ratio, _laws.janosi_forces
-
-        def forces(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
-            return law(slip, tan_beta, load_n, ac, tan_phi, ratio, kappa)
-        return forces
+        return self._shear_law_forces(soil, _laws.janosi_forces)
 
 
 class LinearSlipForceModel(_PatchModel):
@@ -295,13 +302,8 @@ class LinearSlipForceModel(_PatchModel):
     _COMPILED_KIND = 1
 
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
-        ac, tan_phi, ratio = self._patch_constants(soil)
         # lateral anisotropy as in `JanosiForceModel`: tan_beta -> kappa tan_beta
-        kappa, law = self.lateral_stiffness_ratio, _laws.linear_slip_forces
-
-        def forces(slip: float, tan_beta: float, load_n: float) -> tuple[float, float]:
-            return law(slip, tan_beta, load_n, ac, tan_phi, ratio, kappa)
-        return forces
+        return self._shear_law_forces(soil, _laws.linear_slip_forces)
 
 
 class ReinaForceModel(_PatchModel):

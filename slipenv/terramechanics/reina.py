@@ -16,17 +16,17 @@ Departure from the paper: k_x, k_y are floored at 0, so beyond sigma = mu/A (30 
 far outside the fitted 0-0.8 slip, 5-25 deg) the force stays at 0 instead of changing sign.
 
 `reina_forces` is the law in plain floats, as the simulation calls it per wheel and per substep;
-the array functions `reina_forces_n`, `reina_reference_force_n` and `exp_secant` are derived from
-the same scalar code.
+its one implementation is C (``_laws.h``, which the substep loop runs). The array functions
+`reina_forces_n`, `reina_reference_force_n` and `exp_secant` are derived from the same scalar
+code.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numpy.typing import ArrayLike
 
+import slipenv.terramechanics._laws as _laws
 from slipenv.terramechanics.vectorize import array_law
 
 __all__ = [
@@ -38,12 +38,10 @@ __all__ = [
     "slip_ratio_from_slip_angle",
 ]
 
-_TINY = 1e-300  # below it (1 - e^{-y})/y is 1 to rounding; avoids 0/0
-
 
 def _exp_secant(y: float) -> float:
-    """(1 - e^{-y})/y for one float y >= 0 (the text `exp_secant` is derived from)."""
-    return -math.expm1(-y) / y if y > _TINY else 1.0
+    """(1 - e^{-y})/y for one float y >= 0 (``_laws.h``, the text `exp_secant` is derived from)."""
+    return _laws.exp_secant(y)
 
 
 exp_secant = array_law(_exp_secant, name="exp_secant", doc="""\
@@ -54,7 +52,7 @@ exp_secant = array_law(_exp_secant, name="exp_secant", doc="""\
 def _reference_force_n(slip: float, load_n: float, mu: float, stiffness_n: float,
                        high_slip_slope: float) -> float:
     a = abs(slip)
-    return slip * (stiffness_n * _exp_secant(stiffness_n * a / (mu * load_n))
+    return slip * (stiffness_n * _laws.exp_secant(stiffness_n * a / (mu * load_n))
                    - load_n * high_slip_slope)
 
 
@@ -106,12 +104,7 @@ def reina_forces(slip: float, tan_beta: float, load_n: float, mu: float, c_x_n: 
         F_x with the sign of s; F_y opposing the lateral sliding, sign(F_y) = -sign(tan beta).
         At tan beta = 0, F_x = F_x0(s) (Eq. 5); at s = 0, -F_y = F_y0(tan beta) (Eq. 6).
     """
-    if load_n <= 0.0:
-        return 0.0, 0.0
-    sigma_per_mu_w = math.hypot(slip, tan_beta) / (mu * load_n)
-    k_x = c_x_n * _exp_secant(c_x_n * sigma_per_mu_w) - load_n * a_x
-    k_y = c_y_n * _exp_secant(c_y_n * sigma_per_mu_w) - load_n * a_y
-    return (slip * k_x if k_x > 0.0 else 0.0), (-tan_beta * k_y if k_y > 0.0 else 0.0)
+    return _laws.reina_forces(slip, tan_beta, load_n, mu, c_x_n, c_y_n, a_x, a_y)
 
 
 reina_forces_n = array_law(reina_forces, n_out=2, name="reina_forces_n", doc="""\

@@ -3,8 +3,10 @@
 Plain functions of (state, kinematics, soil) for one track, or for the two tracks of a vehicle
 at once (arrays of shape (n_tracks, n_cells)). They are the model's only text: the simulator
 (``slipenv.sim.track_soil``) composes them once per physics substep, and the tests check them
-against the closed forms. The fields are small, so the cost is numpy's per-call overhead: the
-functions update their states in place and keep the number of array operations low.
+against the closed forms. The local soil laws they share with the wheels (Mohr-Coulomb,
+Janosi-Hanamoto, Bekker) are `janosi`'s and `bekker`'s, imported here. The fields are small,
+so the cost is numpy's per-call overhead: the functions update their states in place and keep
+the number of array operations low.
 
 Frame: the hull frame projected on the ground, x forward, y left, origin at the hull reference
 point; a track at lateral offset y_i, contact -L/2 <= x <= L/2, width b. The belt moves
@@ -21,23 +23,24 @@ Shear displacement (Wong & Chiang 2001, Proc. IMechE D 215:343-355; Wong, *Theor
     (:func:`steady_shear_displacement` integrates it exactly). `advance_shear` solves it with
     first-order upwinding on cell faces, the source at cell centres (midpoint rule).
 Shear stress (Janosi & Hanamoto; Wong Eq. 2.56) with Mohr-Coulomb strength (Wong Eq. 2.54):
-    tau = (c + p tan phi)(1 - exp(-|j|/K)) (`cell_forces`), directed against the local sliding
-    velocity
-    (Wong & Chiang's choice). The direction is carried by a short "bristle" state e per belt
-    element, de/dt = v_j - |v_j| e/e_max (the LuGre / brush-model form, Canudas de Wit et al.
-    1995): in sliding it aligns with v_j within a sliding distance of a few e_max, so the
-    steady forces are Wong-Chiang's (tested within 5 %); at rest it is an elastic spring. A
-    stress that jumped with the sign of v_j would be an infinitely stiff damper, which an
+    tau = (c + p tan phi)(1 - exp(-|j|/K)) (`janosi.shear_strength_pa`,
+    `janosi.janosi_stress_pa`; per cell in `cell_forces`), directed against the local sliding
+    velocity (Wong & Chiang's choice). The direction is carried by a short "bristle" state e
+    per belt element, de/dt = v_j - |v_j| e/e_max (the LuGre / brush-model form, Canudas de
+    Wit et al. 1995): in sliding it aligns with v_j within a sliding distance of a few e_max,
+    so the steady forces are Wong-Chiang's (tested within 5 %); at rest it is an elastic
+    spring. A stress that jumped with the sign of v_j would be an infinitely stiff damper, which an
     explicit step at 240 Hz cannot integrate (the vehicle chatters and ratchets downhill).
     At rest the soil springs get Kelvin-Voigt dampers on each cell's displacement rate
     (`soil_damper_forces`; LuGre's sigma_1 term), zero in any steady motion.
 Normal pressure: the road-wheel loads, spread piecewise-linearly over the cells
     (`load_spread_matrix`, hat functions that conserve the load exactly).
 Sinkage (Bekker's pressure-sinkage law, Wong Ch. 2): z0 = (p/(k_c/b + k_phi))^(1/n) per cell
-    (`bekker_sinkage_m`), times Lyasko's slip-sinkage factor (1 + i)/(1 - 0.5 i)
-    (`slip_sinkage_factor`; Lyasko, J. Terramech. 47 (2010) 21-31).
+    (`bekker.pressure_sinkage_m`), times Lyasko's
+    slip-sinkage factor (1 + i)/(1 - 0.5 i) (`slip_sinkage_factor`; Lyasko, J. Terramech. 47
+    (2010) 21-31).
 Compaction resistance (Bekker; Wong Ch. 2 and 5): R_c = b (k_c/b + k_phi) z^(n+1)/(n+1) per
-    track (`compaction_resistance_n` of its deepest cell), acting only while the
+    track (`bekker.compaction_resistance_n` of its deepest cell), acting only while the
     track advances into soil it has not yet cut (a rut *state*: `rut_resistance_n`): rate
     independent, zero in its own rut, so a stalled track does not creep.
 Side-wall (bulldozing) resistance: Rankine passive earth pressure on the track's side wall of
@@ -61,23 +64,21 @@ import math
 
 import numpy as np
 
+from slipenv.terramechanics.janosi import janosi_stress_pa, shear_strength_pa
+
 __all__ = [
     "DIRECTION_SPEED_MPS",
     "UPWIND_SPEED_MPS",
     "GROUND_SPEED_MPS",
     "load_spread_matrix",
     "sliding_velocity",
-    "shear_strength_pa",
-    "janosi_stress_pa",
     "shear_direction",
     "advance_shear",
     "steady_shear_displacement",
     "steady_track_forces",
     "cell_forces",
     "soil_damper_forces",
-    "bekker_sinkage_m",
     "slip_sinkage_factor",
-    "compaction_resistance_n",
     "rut_resistance_n",
     "passive_pressure_n_per_m",
     "berm_height_m",
@@ -139,22 +140,6 @@ def sliding_velocity(track_speed_mps, belt_speed_mps, lateral_speed_mps, yaw_rat
     np.multiply(x_cell_m, yaw_rate_rad_s, out=out[1])
     out[1] += np.asarray(lateral_speed_mps, dtype=float)[:, None]
     return out
-
-
-def shear_strength_pa(pressure_pa, cohesion_pa, tan_phi):
-    """Mohr-Coulomb shear strength tau_max = c + p tan phi [Pa] (Wong Eq. 2.54). Broadcasts."""
-    strength = pressure_pa * tan_phi
-    strength += cohesion_pa
-    return strength
-
-
-def janosi_stress_pa(j_abs_m, strength_pa, shear_modulus_m):
-    """Janosi-Hanamoto shear stress tau = tau_max (1 - e^{-|j|/K}) [Pa] (Wong Eq. 2.56), of
-    the shear displacement's magnitude |j| [m] and the strength tau_max
-    (`shear_strength_pa`). Broadcasts."""
-    tau = np.expm1(j_abs_m * (-1.0 / shear_modulus_m))  # -(1 - e^{-|j|/K})
-    tau *= strength_pa
-    return -tau
 
 
 def shear_direction(vx, vy, jx, jy, v_reg: float = DIRECTION_SPEED_MPS):
@@ -370,23 +355,11 @@ def soil_damper_forces(dj_m: np.ndarray, shear_force_n: np.ndarray,
 
 
 # -- sinkage and compaction ------------------------------------------------------------------
-def bekker_sinkage_m(pressure_pa, width_m, k_c, k_phi, n_exp):
-    """Static sinkage z0 = (p/(k_c/b + k_phi))^(1/n) [m] under the pressure p of a cell of a
-    track of width b (Bekker's pressure-sinkage law; Wong Ch. 2). Broadcasts."""
-    return (np.maximum(pressure_pa, 0.0) * (1.0 / (k_c / width_m + k_phi))) ** (1.0 / n_exp)
-
-
 def slip_sinkage_factor(slip):
     """Lyasko's slip-sinkage factor z/z0 = (1 + i)/(1 - 0.5 i), slip i clipped to [0, 1]
     (Lyasko, "Slip sinkage effect in soil-vehicle mechanics", J. Terramech. 47 (2010) 21-31)."""
     i = np.minimum(np.maximum(slip, 0.0), 1.0)
     return (1.0 + i) / (1.0 - 0.5 * i)
-
-
-def compaction_resistance_n(sinkage_m, width_m, k_c, k_phi, n_exp):
-    """R_c = b (k_c/b + k_phi) z^(n+1)/(n+1) [N]: the work of cutting a rut of depth z per unit
-    travel (Bekker; Wong Ch. 2 and 5). Broadcasts."""
-    return ((k_c + width_m * k_phi) / (n_exp + 1.0)) * np.maximum(sinkage_m, 0.0) ** (n_exp + 1.0)
 
 
 def rut_resistance_n(resistance_n: float, travel_m: float, cut_front_m: float,

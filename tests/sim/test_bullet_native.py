@@ -13,7 +13,8 @@ import pytest
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim import bullet_native, compiled
 from slipenv.sim.wheel_soil import WheelSoilInjector
-from tests.sim.conftest import turn_and_stop
+from slipenv.terrain.terrain import TerrainSpec
+from tests.sim.conftest import drive, turn_and_stop
 
 p = import_pybullet()
 
@@ -207,6 +208,48 @@ def test_native_readings_are_rechecked_against_the_python_api_every_nth_substep_
     assert contact[0] == 40 * sim.substeps  # the Husky stays on the ground throughout
     assert loop.native and not loop.native_mismatch
     assert loop.native_verifications - before == (contact[0] // every if every else 0)
+
+
+@needs_native
+def test_wheels_leaving_a_heightfield_between_rechecks_keep_the_native_reader(make_sim):
+    """The 4WS rover rocks over RoverMounds-v0's mounds (a heightfield): wheels lose and regain
+    contact between two rechecks. A wheel without contact has no contact-patch reading (the
+    loop skips it), so the rechecks find the two readings equal, warn nothing and the loop stays
+    native. Counted alongside: rechecks at which a wheel had left the ground since it last
+    touched it, the case in which comparing its leftover patch sums reported a mismatch."""
+    terrain = TerrainSpec(kind="mounds", mound_height_m=0.06, mound_radius_m=0.4,
+                          mound_count=30, size_m=8.0, clear_radius_m=0.6)
+    sim = make_sim("rover_4ws", "lunar_simulant", "reina", terrain=terrain)
+    sim.reset(0.0, 0.0, 0.3)
+    loop = sim.injector._loop
+    assert loop.native_verified
+    every = 10
+    loop.verify_every = every
+    before = loop.native_verifications
+    touched = [False] * len(loop.load)  # in contact between rechecks
+    counts = {"contact": 0, "lifted_at_recheck": 0}
+
+    def apply():
+        checks = loop.native_verifications
+        loop.apply()
+        loads = loop.load
+        counts["contact"] += any(load > 0.0 for load in loads)
+        if loop.native_verifications > checks:
+            counts["lifted_at_recheck"] += any(t and load == 0.0
+                                               for t, load in zip(touched, loads, strict=True))
+            touched[:] = [False] * len(loads)
+        else:
+            touched[:] = [t or load > 0.0 for t, load in zip(touched, loads, strict=True)]
+
+    sim.injector.apply = apply
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", bullet_native.NativeReaderWarning)
+        drive(sim, 0.3, 0.0, 4.0)
+    # the drive crossed mounds and the case occurred (14 times with the laws of this writing;
+    # one occurrence made the comparison of leftover patch sums fail)
+    assert counts["lifted_at_recheck"] >= 3
+    assert loop.native and not loop.native_mismatch
+    assert loop.native_verifications - before == counts["contact"] // every
 
 
 @needs_native

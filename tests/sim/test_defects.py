@@ -1,4 +1,4 @@
-"""The wheel-injection defects of the audit (physics-notes §1, issue 16 item 4), in the world.
+"""The wheel-injection defects of the audit (physics-notes §1), in the world.
 
 Each test failed on the injector before the fix: a stalled vehicle crept at 1.5 cm/s; the farm
 vehicle's castors dragged along the chassis axis on a circle; the relaxation length was the
@@ -191,9 +191,3 @@ def test_farm_castor_resistance_is_the_bekker_compaction_of_its_own_wheel(make_s
                                             soil.k_phi, soil.n_exp, soil.deformable)
         assert state.resistance_n[k] == pytest.approx(own, rel=1e-9)  # sliding: full R
         assert own > 1.5 * (f_r * load + float(gamma_d) * load ** float(e_d))
-
-
-@pytest.mark.parametrize("value", ["yes", 1, None])
-def test_castor_own_geometry_must_be_a_bool_at_construction(make_sim, value):
-    with pytest.raises(ValueError, match="castor_own_geometry must be True or False"):
-        make_sim("farm_2wd", "field_loam", "linear", castor_own_geometry=value)

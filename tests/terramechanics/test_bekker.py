@@ -8,6 +8,7 @@ import pytest
 from slipenv.terramechanics import CONCRETE, FIELD_LOAM, LOOSE_SAND
 from slipenv.terramechanics.bekker import (
     compaction_resistance_n,
+    pressure_sinkage_m,
     rut_following_compaction_n,
     rut_load_ratio,
     track_compaction_law,
@@ -68,6 +69,31 @@ def test_track_sinkage_is_pressure_over_modulus_to_one_over_n():
     z = track_sinkage_m(w, b, length, k_c, k_phi, 1.1)
     assert z == pytest.approx((p / (k_c / b + k_phi)) ** (1 / 1.1), rel=1e-14)
     assert z < wheel_sinkage_m(w, b, 0.1, k_c, k_phi, 1.1)  # a track spreads the load
+
+
+def test_pressure_sinkage_solves_bekkers_law_and_compaction_is_the_work_of_the_rut():
+    """A track cell under 2800 Pa (about 30 kg on two 0.48 x 0.11 m tracks) on dry sand."""
+    p, b, k_c, k_phi, n = 2800.0, 0.11, 0.99e3, 1528.43e3, 1.1
+    z = float(pressure_sinkage_m(p, b, k_c, k_phi, n))
+    assert (k_c / b + k_phi) * z**n == pytest.approx(p, rel=1e-12)
+    r = float(compaction_resistance_n(z, b, k_c, k_phi, n))
+    zs = np.linspace(0.0, z, 20001)  # R_c = b int_0^z p dz
+    assert r == pytest.approx(b * np.trapezoid((k_c / b + k_phi) * zs**n, zs), rel=1e-6)
+
+
+def test_pressure_sinkage_and_compaction_broadcast_a_soil_per_track_over_its_cells():
+    """The track model's shapes: pressures (n_tracks, n_cells), one soil per track (column)."""
+    p = np.array([[0.0, 1e3, 4e3], [-50.0, 1e3, 4e3]])
+    k_phi = np.array([[820e3], [1640e3]])
+    z = pressure_sinkage_m(p, 0.11, 990.0, k_phi, 1.0)
+    assert z.shape == (2, 3)
+    np.testing.assert_allclose(z, p.clip(0.0) / (990.0 / 0.11 + k_phi), rtol=1e-14)
+    r = compaction_resistance_n(z.max(axis=1, keepdims=True), 0.11, 990.0, k_phi, 1.0)
+    assert r.shape == (2, 1) and r[1, 0] < r[0, 0]  # the stiffer soil sinks and resists less
+
+
+def test_negative_sinkage_compacts_nothing():
+    assert compaction_resistance_n(-0.01, 0.1, *SAND) == 0.0
 
 
 def test_track_compaction_power_law_equals_sinkage_then_resistance():

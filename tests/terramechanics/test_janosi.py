@@ -9,11 +9,13 @@ from scipy.integrate import quad
 from slipenv.terramechanics.janosi import (
     janosi_forces,
     janosi_shear_stress_pa,
+    janosi_stress_pa,
     max_thrust_n,
     mohr_coulomb_strength_pa,
     okello_secant,
     okello_traction,
     patch_thrust_n,
+    shear_strength_pa,
     small_slip_stiffness,
 )
 
@@ -40,6 +42,23 @@ def test_janosi_shear_is_zero_at_zero_odd_in_j_and_tends_to_q_max():
     assert q[0] == 0.0
     assert q[2] == -q[1]
     assert q[3] == pytest.approx(500.0, rel=1e-12)
+
+
+def test_stress_of_floats_at_four_moduli_is_98_percent_of_the_mohr_coulomb_strength():
+    """Wong Eq. 2.54 and 2.56 on plain floats, as the track model passes its soil."""
+    strength = shear_strength_pa(2800.0, 1.04e3, math.tan(math.radians(28.0)))
+    assert strength == pytest.approx(1.04e3 + 2800.0 * 0.531709, rel=1e-6)
+    assert janosi_stress_pa(0.1, strength, 0.025) == pytest.approx(
+        strength * (1.0 - math.exp(-4.0)), rel=1e-14)
+
+
+def test_stress_broadcasts_a_strength_per_track_over_its_cells():
+    j = np.array([0.0, 0.025, 1.0])
+    strength = shear_strength_pa(np.array([[1e3], [2e3]]), 0.0, 1.0)
+    tau = janosi_stress_pa(j, strength, 0.025)
+    assert tau.shape == (2, 3)
+    np.testing.assert_allclose(tau[:, 1], strength[:, 0] * (1.0 - math.exp(-1.0)), rtol=1e-14)
+    assert not tau[:, 0].any()
 
 
 @pytest.mark.parametrize("x", [0.0, 1e-12, 1e-9, 3e-6, 1e-5, 2e-5, 1e-3, 0.1, 1.0, 5.0])

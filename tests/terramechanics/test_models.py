@@ -296,7 +296,7 @@ def test_reina_load_scaling_is_load_times_the_law_at_unit_load_with_c_over_w_ref
         fx1, fy1 = reina_forces(s, tb, 1.0, p.mu, p.c_x_n / p.reference_load_n,
                                 p.c_y_n / p.reference_load_n, p.a_x, p.a_y)
         fx, fy, _ = kernel(s, tb, w)
-        # the model runs the C law, reina_forces is Python: rounding apart, the same
+        # W times the law at unit load with C/W_ref is the law at W with C W/W_ref, to rounding
         assert (fx, fy) == pytest.approx((fx1 * w, fy1 * w), rel=1e-12)
 
 
@@ -316,3 +316,17 @@ def test_lateral_stiffness_ratio_scales_side_stiffness_only_and_defaults_to_isot
     for bad in (0.0, -1.0, math.nan, math.inf):
         with pytest.raises(ValueError, match="lateral_stiffness_ratio"):
             cls(WHEEL, lateral_stiffness_ratio=bad)
+
+
+@pytest.mark.parametrize("cls", [JanosiForceModel, LinearSlipForceModel, ReinaForceModel])
+def test_a_subclass_keeping_the_law_gets_the_compiled_kernels_forces_from_its_python_kernel(cls):
+    """A subclass runs `_forces` (the Python kernel the substep loop calls back); keeping the
+    law it must give what the compiled kernel of its base class gives."""
+    reina = cls is ReinaForceModel
+    options = {} if reina else {"lateral_stiffness_ratio": 2.0}
+    sub, base = type("Same", (cls,), {})(WHEEL, **options), cls(WHEEL, **options)
+    soil = LUNAR_SIMULANT.params() if reina else SAND
+    assert sub.kernel_constants(soil) is None and base.kernel_constants(soil) is not None
+    python, compiled = sub.scalar_kernel(soil), base.scalar_kernel(soil)
+    for s, tb, w in zip(SLIP[5:15], TAN_BETA[5:15], LOAD[5:15], strict=True):
+        assert python(s, tb, w) == pytest.approx(compiled(s, tb, w), rel=1e-12, abs=1e-12)

@@ -8,21 +8,15 @@ import math
 import numpy as np
 import pytest
 
-from slipenv.terramechanics.bekker import track_sinkage_m
-from slipenv.terramechanics.janosi import janosi_shear_stress_pa, mohr_coulomb_strength_pa
 from slipenv.terramechanics.track import (
     advance_shear,
     advance_wall,
-    bekker_sinkage_m,
     berm_height_m,
     cell_forces,
-    compaction_resistance_n,
-    janosi_stress_pa,
     load_spread_matrix,
     passive_pressure_n_per_m,
     rut_resistance_n,
     shear_direction,
-    shear_strength_pa,
     sliding_velocity,
     slip_sinkage_factor,
     soil_damper_forces,
@@ -187,18 +181,6 @@ def test_the_cell_stiffness_is_the_derivative_of_the_janosi_stress():
     assert not fy.any()
 
 
-def test_the_janosi_stress_and_mohr_coulomb_strength_agree_with_the_wheels_functions():
-    """The track's array versions (on its hot path) against `slipenv.terramechanics.janosi`'s
-    (Wong Eq. 2.54, 2.56)."""
-    j = np.linspace(0.0, 0.2, 41)
-    p = np.linspace(0.0, 2e4, 41)
-    strength = shear_strength_pa(p, C, TAN_PHI)
-    np.testing.assert_allclose(strength, mohr_coulomb_strength_pa(p, C, PHI), rtol=1e-12)
-    np.testing.assert_allclose(janosi_stress_pa(j, strength, K),
-                               janosi_shear_stress_pa(j, strength, K), rtol=1e-12, atol=1e-12)
-    assert janosi_stress_pa(0.1, 1000.0, K) == pytest.approx(1000.0 * (1 - math.exp(-4.0)))
-
-
 def test_the_soil_dampers_vanish_in_steady_motion_and_only_dissipate():
     rng = np.random.default_rng(3)
     f_shear = rng.normal(size=(2, 2, N)) * 5.0
@@ -290,18 +272,6 @@ def test_passive_pressure_is_rankine():
     n_phi = math.tan(math.radians(45 + 15)) ** 2
     assert passive_pressure_n_per_m(0.1, 15e3, 500.0, math.radians(30)) == pytest.approx(
         0.5 * 15e3 * 0.01 * n_phi + 2 * 500 * 0.1 * math.sqrt(n_phi))
-
-
-def test_sinkage_and_compaction_are_bekkers():
-    k_c, k_phi, n = 0.99e3, 1528.43e3, 1.1
-    z = float(bekker_sinkage_m(P, B_W, k_c, k_phi, n))
-    assert (k_c / B_W + k_phi) * z ** n == pytest.approx(P)
-    # the same law as `bekker.track_sinkage_m` of a cell's load and length
-    assert z == pytest.approx(float(track_sinkage_m(P * B_W * DX, B_W, DX, k_c, k_phi, n)))
-    r = float(compaction_resistance_n(z, B_W, k_c, k_phi, n))
-    # R_c is the work of pressing the rut, b int_0^z p dz.
-    zs = np.linspace(0, z, 20001)
-    assert r == pytest.approx(B_W * np.trapezoid((k_c / B_W + k_phi) * zs ** n, zs), rel=1e-6)
 
 
 def test_slip_sinkage_is_lyaskos():
