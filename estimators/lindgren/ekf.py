@@ -58,9 +58,10 @@ _ODO_SKIPS = {kernel.INVALID_SOIL: "odo_invalid_soil", kernel.TORQUE_NAN: "torqu
 
 def compiled_available() -> bool:
     """True when the filter runs compiled (numba), False under ``NUMBA_DISABLE_JIT=1``."""
-    from numba import config
+    from numba.core import config
 
-    return not config.DISABLE_JIT
+    # numba fills its config module from the NUMBA_* variables at run time.
+    return not config.DISABLE_JIT  # type: ignore[attr-defined]
 
 
 def warm_up() -> None:

@@ -70,12 +70,18 @@ class ProjectionLike(Protocol):
     """What :func:`build_observation` needs of a path projection
     (:class:`slipenv.paths.PathProjection` satisfies it)."""
 
-    s: float
-    cross_track_m: float
-    heading_rad: float
-    curvature_1pm: float
-    speed_mps: float
-    remaining_m: float
+    @property
+    def s(self) -> float: ...
+    @property
+    def cross_track_m(self) -> float: ...
+    @property
+    def heading_rad(self) -> float: ...
+    @property
+    def curvature_1pm(self) -> float: ...
+    @property
+    def speed_mps(self) -> float: ...
+    @property
+    def remaining_m(self) -> float: ...
 
 
 def build_observation(x_m: float, y_m: float, yaw_rad: float, speed_mps: float,

@@ -9,6 +9,7 @@ from typing import Any, cast
 
 import numpy as np
 
+from slipenv.estimators.base import Estimator
 from slipenv.paths import Path, path_by_name
 from slipenv.terramechanics.models import ContactGeometry, ForceModel, force_model_by_name
 from slipenv.terramechanics.presets import soil_by_name
@@ -83,7 +84,7 @@ def check_estimator_name(name: str) -> None:
                          f"{sorted(ESTIMATORS)}")
 
 
-def build_estimator(name: str, kwargs: dict, spec: VehicleSpec, context: dict):
+def build_estimator(name: str, kwargs: dict, spec: VehicleSpec, context: dict) -> Estimator:
     """Build estimator ``name`` with ``kwargs``; any failure (unknown option, bad value) is a
     ``ValueError`` naming ``estimator_kwargs``, with a suggestion for a misspelt option."""
     from slipenv.envs.estimation import ESTIMATORS, make_estimator

@@ -29,6 +29,7 @@ from slipenv.envs.factory import (
     make_vehicle,
 )
 from slipenv.envs.render import render_camera_panel, render_map
+from slipenv.estimators.base import Estimator
 from slipenv.paths import Path, sample_path
 from slipenv.sensors.noise import SensorNoise
 from slipenv.sensors.onboard import SensorSuite
@@ -158,7 +159,6 @@ class SlipEnv(gym.Env):
                 f"render_mode must be one of {self.metadata['render_modes']} or None, "
                 f"got {render_mode!r}"
             )
-        self._sim = None  # so close() and the finalizer work if construction fails
         self.config = SlipEnvConfig.from_kwargs(config, **kwargs)
         cfg = self.config
         self.render_mode = render_mode
@@ -183,7 +183,7 @@ class SlipEnv(gym.Env):
         self._sensors = SensorSuite(self._vehicle.counts_per_rad, noise, beacons=beacons)
         self.observation_space = spaces.Box(OBS_LOW, OBS_HIGH, dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
-        self.estimator = None
+        self.estimator: Estimator | None = None
         self._truth: VehicleTruth | None = None
         self._trace: list[tuple[float, float]] = []  # true (x, y) per step, for render()
         self._trace_est: list[tuple[float, float]] = []
@@ -267,7 +267,7 @@ class SlipEnv(gym.Env):
         return (x0 + r * math.cos(bearing), y0 + r * math.sin(bearing),
                 wrap_angle(yaw0 + math.radians(yaw_deg) * (2.0 * u[2] - 1.0)))
 
-    def _build_estimator(self):
+    def _build_estimator(self) -> Estimator:
         return build_estimator(self.config.estimator, self.config.estimator_kwargs,
                                self._vehicle, self._estimator_context())
 
@@ -279,8 +279,8 @@ class SlipEnv(gym.Env):
         self._truth = truth
         self._sensors.reset()
         frame = self._sensors.measure(truth, self.np_random)
-        self.estimator = self._build_estimator()
-        estimate = self.estimator.reset(x0, y0, yaw0, frame)
+        self.estimator = estimator = self._build_estimator()
+        estimate = estimator.reset(x0, y0, yaw0, frame)
         if self._rig is not None:
             self._rig.reset(self.np_random)
             self._camera_step(truth)
@@ -373,8 +373,9 @@ class SlipEnv(gym.Env):
     def close(self) -> None:
         """Disconnect the physics client (idempotent; a dropped env is also released by the
         simulator's finalizer)."""
-        if getattr(self, "_sim", None) is not None:
-            self._sim.close()
+        sim = getattr(self, "_sim", None)  # absent if construction failed before it
+        if sim is not None:
+            sim.close()
 
     # -- helpers ---------------------------------------------------------------------------
     def _estimator_context(self) -> dict:
@@ -384,10 +385,17 @@ class SlipEnv(gym.Env):
         # A weak reference: an estimator that kept the context must not keep the env (and its
         # physics client) alive through a reference cycle.
         true_soil = weakref.WeakMethod(self.true_soil)
+
+        def soil() -> Any:
+            method = true_soil()
+            if method is None:
+                raise ReferenceError("the env that made this estimator no longer exists")
+            return method()
+
         return {
             "dt_s": self._dt_s,
             "beacons_xy": None if beacons is None else beacons.beacons_xy,
-            "true_soil": lambda: true_soil()(),
+            "true_soil": soil,
             "trace_camera": self._mount_camera,
         }
 

@@ -368,7 +368,7 @@ class TrackSoilInjector:
         sums = self._reduce @ out.reshape(6, -1).T  # (n + 2 n_tracks, 6)
         r_c = compaction_resistance_n(z.max(axis=1, keepdims=True), width, self._kc,
                                       self._kphi, self._n)
-        self._apply_forces(pos, axes, sums, r_c.ravel().tolist(), load, vx_list, vby, wbx,
+        self._apply_forces(pos, axes, sums, np.ravel(r_c).tolist(), load, vx_list, vby, wbx,
                            wbz)
         self.track_slip = slip
 
