@@ -35,6 +35,7 @@ from stable_baselines3.common.logger import configure
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
 from slipenv.controllers.baseline import baseline_controller
+from slipenv.estimators.lindgren.ekf import warm_up
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.rollout import TrajectoryRecorder, rollout
 
@@ -211,6 +212,8 @@ def train(env_id: str, algo: str = "ppo", total_timesteps: int | None = None, se
                         **config.env_kwargs)
 
     vec_cls = SubprocVecEnv if config.n_envs > 1 else DummyVecEnv
+    if config.n_envs > 1:
+        warm_up()  # the Lindgren EKF compiled once here, not by every worker on a cold cache
     vec = make_vec_env(env_fn, n_envs=config.n_envs, seed=config.seed, vec_env_cls=vec_cls)
     try:
         action_space = vec.action_space

@@ -43,12 +43,18 @@ step, where numpy's per-call overhead on scalars would cost several times the ar
 from __future__ import annotations
 
 import math
+from typing import overload
+
+import numpy as np
 
 from slipenv.contracts import SensorFrame
 
 from ..base import OdometryGeometry
 from ..gyrodometry import Gyrodometry
 from .kinematics import check_tread
+
+Speed = float | np.ndarray
+"""A track speed [m/s] (or a share derived from two): one float, or a numpy array of them."""
 
 DEFAULT_SPEED_EPS_MPS = 1e-3  # [m/s] regularising track speed in the Endo weights
 
@@ -80,19 +86,30 @@ def endo_ratio(v_l: float, v_r: float, n: float) -> float:
     return -math.copysign(1.0, v_r * v_l) * abs(v_r / v_l) ** n if v_r != 0.0 else -0.0
 
 
-def endo_left_share(
-    v_l: float, v_r: float, n: float, speed_eps_mps: float = DEFAULT_SPEED_EPS_MPS
-) -> float:
+@overload
+def endo_left_share(v_l: float, v_r: float, n: float,
+                    speed_eps_mps: float = ...) -> float: ...
+@overload
+def endo_left_share(v_l: np.ndarray, v_r: np.ndarray, n: float,
+                    speed_eps_mps: float = ...) -> np.ndarray: ...
+def endo_left_share(v_l: Speed, v_r: Speed, n: float,
+                    speed_eps_mps: float = DEFAULT_SPEED_EPS_MPS) -> Speed:
     """Share f of the yaw-rate discrepancy taken by the left track's slip velocity [-].
 
     ``f = a_l / (a_l + a_r)`` with ``a = (v² + ε²)^((1-n)/2)``; written with the exponent's
     magnitude so that n > 1 gives no infinities. f = 1/2 when both regularised speeds are 0.
+    Floats give a float (the odometry, once per control step); numpy arrays give an array of
+    their broadcast shape (the diagnosis, over whole logs): the same arithmetic either way.
     """
     n, eps = check_endo_n(n), _check_eps(speed_eps_mps)
-    power = abs(1.0 - n)
-    a_l, a_r = math.hypot(v_l, eps) ** power, math.hypot(v_r, eps) ** power
+    half_power = 0.5 * abs(1.0 - n)
+    a_l = (v_l * v_l + eps * eps) ** half_power
+    a_r = (v_r * v_r + eps * eps) ** half_power
     total = a_l + a_r
-    return (a_l if n <= 1.0 else a_r) / total if total > 0.0 else 0.5
+    num = a_l if n <= 1.0 else a_r
+    if isinstance(total, np.ndarray):
+        return np.where(total > 0.0, num / np.where(total > 0.0, total, 1.0), 0.5)
+    return num / total if total > 0.0 else 0.5
 
 
 def endo_slip_velocities(

@@ -82,6 +82,9 @@ def run_local(todo: list[dict], out_dir: str, workers: int, quiet: bool) -> None
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
+        from slipenv.estimators.lindgren.ekf import warm_up
+
+        warm_up()  # compiled here once, not by every worker at the same time on a cold cache
         ctx = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
             futures = [pool.submit(run_cell, cell, out_dir) for cell in todo]

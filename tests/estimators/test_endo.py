@@ -124,3 +124,17 @@ def test_bad_eps_and_tread_are_rejected():
         EndoOdometry(GEOM, 0.824, speed_eps_mps=-1e-3)
     with pytest.raises(ValueError, match="tread_m"):
         endo_slip_velocities(0.1, 0.2, 0.1, -0.41, 0.824)
+
+
+def test_the_left_share_of_arrays_is_the_left_share_of_each_element():
+    """The diagnosis calls the odometry's own law on whole logs: element by element it is the
+    float law, and a zero-speed pair with ε = 0 still splits the discrepancy in half."""
+    rng = np.random.default_rng(7)
+    v_l, v_r = rng.normal(0.0, 0.2, 50), rng.normal(0.0, 0.2, 50)
+    v_l[0] = v_r[0] = 0.0
+    for n in (0.5, 0.824, 1.3):
+        shares = endo_left_share(v_l, v_r, n, 0.0)
+        expected = [endo_left_share(float(a), float(b), n, 0.0)
+                    for a, b in zip(v_l, v_r, strict=True)]
+        np.testing.assert_allclose(shares, expected, rtol=1e-14)
+        assert shares[0] == 0.5
