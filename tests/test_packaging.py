@@ -87,3 +87,13 @@ def test_editable_install_resolves_the_mapped_packages_outside_the_repo(tmp_path
     file, bare = done.stdout.split()
     assert pathlib.Path(file).resolve().parent == ROOT / "estimators"
     assert bare == "None"
+
+
+def test_importing_slipenv_loads_neither_numba_nor_the_estimators():
+    """``import slipenv`` registers the envs and nothing more: numba and scipy.stats (about
+    1.5 s on the CI machine) load with the first estimator that needs them."""
+    code = ("import sys, slipenv; print(sorted(m for m in ('numba', 'scipy.stats', "
+            "'slipenv.estimators') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip().splitlines()[-1] == "[]"

@@ -5,11 +5,10 @@ from __future__ import annotations
 import difflib
 import inspect
 from collections.abc import Callable
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from slipenv.estimators.base import Estimator
 from slipenv.paths import Path, path_by_name
 from slipenv.terramechanics.models import ContactGeometry, ForceModel, force_model_by_name
 from slipenv.terramechanics.presets import soil_by_name
@@ -17,6 +16,9 @@ from slipenv.terramechanics.soil import Soil
 from slipenv.terramechanics.soil_map import SoilMap, UniformSoil
 from slipenv.vehicles.presets import vehicle_by_name
 from slipenv.vehicles.spec import VehicleSpec
+
+if TYPE_CHECKING:  # the estimators package imports scipy.stats and numba: 1.5 s
+    from slipenv.estimators.base import Estimator
 
 ForceModelFactory = Callable[[ContactGeometry], ForceModel]
 """A force model built for a wheel's contact geometry (the ``force_model`` option's callable)."""

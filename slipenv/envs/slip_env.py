@@ -11,7 +11,7 @@ import math
 import os
 import sys
 import weakref
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -29,7 +29,6 @@ from slipenv.envs.factory import (
     make_vehicle,
 )
 from slipenv.envs.render import render_camera_panel, render_map
-from slipenv.estimators.base import Estimator
 from slipenv.paths import Path, sample_path
 from slipenv.sensors.noise import SensorNoise
 from slipenv.sensors.onboard import SensorSuite
@@ -39,6 +38,9 @@ from slipenv.sim.simulator import PhysicsBlowUp, Simulator, VehicleTruth
 from slipenv.terrain.terrain import TerrainSpec
 from slipenv.vehicles.kinematics import twist_to_commands
 from slipenv.vehicles.spec import VehicleSpec
+
+if TYPE_CHECKING:  # the estimators package imports scipy.stats and numba: 1.5 s
+    from slipenv.estimators.base import Estimator
 
 
 def _checked_action(action: Any) -> tuple[float, float]:
