@@ -10,6 +10,7 @@ view is reported beside it.
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path as FsPath
 from typing import Any
@@ -127,6 +128,14 @@ def run_episode(env_id: str, seed: int = 0, controller: str = "yamauchi",
 
             base = env.unwrapped
             assert isinstance(base, SlipEnv)  # baseline_controller has checked it
+            if "lindgren" in base.config.estimator:
+                # Otherwise the first step stalls silently while numba compiles the filter.
+                from slipenv.estimators.lindgren.ekf import warm_up
+
+                print("preparing the Lindgren EKF (numba compiles it on the first run after an "
+                      "install, about 15 s; later runs load it from the cache)",
+                      file=sys.stderr, flush=True)
+                warm_up()
             limit = None if env.spec is None else env.spec.max_episode_steps
             total = max_steps or limit or base.max_steps
             bar = tqdm(total=total, desc=env_id, unit="step", leave=False)
