@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from slipenv.pybullet_quiet import import_pybullet
-from slipenv.sim import bullet_native, compiled
+from slipenv.sim import bullet_native
 from slipenv.sim.wheel_soil import WheelSoilInjector
 from slipenv.terrain.terrain import TerrainSpec
 from tests.sim.conftest import drive, turn_and_stop
@@ -19,9 +19,9 @@ from tests.sim.conftest import drive, turn_and_stop
 p = import_pybullet()
 
 needs_native = pytest.mark.skipif(
-    compiled.wheel_loop_module() is None or bullet_native.client_table() is None,
-    reason="native PyBullet access needs the compiled wheel loop (pip install -e .) and a "
-           "pybullet module with an ELF symbol table (Linux wheels have one)")
+    bullet_native.client_table() is None,
+    reason="native PyBullet access needs a pybullet module with an ELF symbol table (Linux "
+           "wheels have one) whose version is on the reader's list")
 
 
 @pytest.fixture(autouse=True)
@@ -81,8 +81,6 @@ def test_a_pybullet_the_reader_does_not_mirror_is_refused(version, api_version, 
     assert named in bullet_native.native_refusal(version, api_version)
 
 
-@pytest.mark.skipif(compiled.wheel_loop_module() is None,
-                    reason="the native reader needs the compiled wheel loop (pip install -e .)")
 def test_an_unlisted_pybullet_reads_through_the_python_api_after_one_warning(make_sim,
                                                                               monkeypatch):
     sim = make_sim("husky", "loose_sand", "linear")
@@ -272,8 +270,7 @@ def test_a_disconnected_client_is_pybullets_own_error(make_sim):
 def test_native_queries_required_but_switched_off_is_a_clear_error(make_sim, monkeypatch):
     sim = make_sim("husky", "loose_sand", "linear")
     monkeypatch.setenv(bullet_native.PYBULLET_API_ENV, "1")
-    with pytest.raises(ValueError, match="native_queries=True .*SLIPENV_PYBULLET_API is set"
-                       if compiled.wheel_loop_module() is not None else "native_queries=True"):
+    with pytest.raises(ValueError, match="native_queries=True .*SLIPENV_PYBULLET_API is set"):
         WheelSoilInjector(sim.client, sim.spec, sim.body, sim.terrain.body_id,
                           sim.injector.force_model, sim.injector.soil_map, sim.dt_s,
                           native_queries=True)
