@@ -9,6 +9,12 @@ Two faces of the same composition (:func:`compose_residual`):
   residual;
 - :class:`ResidualPolicy` wraps a trained model for use on the *plain* env: its ``predict``
   returns the composed action, so it is evaluated, exported or rolled out like any controller.
+
+A model trained on the wrapper carries its composition: the wrapper's action space is a
+:class:`ResidualBox` (a ``Box`` that also names the base controller, its keyword arguments and
+the scale), and stable-baselines3 saves a model's action space in its ``.zip``. So any model
+trained on the wrapper -- by ``slipenv train``, rl-zoo3 or a user's own script -- can be
+recomposed from the file alone (:func:`residual_composition`).
 """
 
 from __future__ import annotations
@@ -26,6 +32,73 @@ def _check_scale(scale: float) -> float:
     if not (0.0 < scale <= 1.0):
         raise ValueError(f"scale must be in (0, 1], got {scale!r}")
     return scale
+
+
+class ResidualBox(gym.spaces.Box):
+    """The residual wrapper's action space: the env's ``Box`` plus the composition it stands for.
+
+    Equal to the plain ``Box`` of the same bounds (so SB3 loads the model next to the plain
+    env), it is saved with the model and tells a loader how to turn the model's action, a
+    residual, back into the env's action.
+
+    Parameters
+    ----------
+    low, high, shape, dtype
+        As ``gymnasium.spaces.Box``.
+    controller : str
+        Base controller name (``slipenv.controllers.baseline.BASELINE_NAMES``).
+    controller_kwargs : dict
+        Its keyword arguments (JSON-able).
+    scale : float
+        Residual authority as a fraction of the action range.
+    """
+
+    def __init__(self, low: Any, high: Any, shape: Any = None, dtype: Any = np.float32, *,
+                 controller: str = "yamauchi", controller_kwargs: dict | None = None,
+                 scale: float = 0.3) -> None:
+        super().__init__(low, high, shape, dtype)
+        self.residual_controller = str(controller)
+        self.residual_controller_kwargs = dict(controller_kwargs or {})
+        self.residual_scale = _check_scale(scale)
+
+    def composition(self) -> dict[str, Any]:
+        """The :class:`ResidualActionWrapper` keyword arguments that rebuild this composition.
+
+        Raises
+        ------
+        ValueError
+            If the saved space lacks its composition (a damaged or foreign pickle).
+        """
+        try:
+            controller, scale = self.residual_controller, self.residual_scale
+            kwargs = dict(self.residual_controller_kwargs)
+        except AttributeError as exc:
+            raise ValueError(f"a residual action space without its composition ({exc}): "
+                             "cannot tell which base controller the residual adds to") from None
+        return {**kwargs, "controller": controller, "scale": _check_scale(scale)}
+
+    def __repr__(self) -> str:
+        box = super().__repr__()  # "Box(low, high, shape, dtype)"
+        return (f"Residual{box[:-1]}, controller={self.residual_controller!r}, "
+                f"scale={self.residual_scale})")
+
+
+def residual_composition(obj: Any) -> dict[str, Any] | None:
+    """The residual composition a model (or an action space) records, or None if it has none.
+
+    Parameters
+    ----------
+    obj : SB3 model, gymnasium space or any object
+        Read through its ``action_space`` (a model) or as the space itself.
+
+    Returns
+    -------
+    dict or None
+        :class:`ResidualActionWrapper` keyword arguments (``controller``, ``scale`` and the
+        controller's own), or None for a model trained on the plain env.
+    """
+    space = obj if isinstance(obj, gym.spaces.Space) else getattr(obj, "action_space", None)
+    return space.composition() if isinstance(space, ResidualBox) else None
 
 
 def compose_residual(base_action: np.ndarray, residual: np.ndarray, scale: float) -> np.ndarray:
@@ -55,6 +128,13 @@ class ResidualActionWrapper(gym.ActionWrapper):
         super().__init__(env)
         self.scale = _check_scale(scale)
         self.baseline = baseline_controller(env, controller, **controller_kwargs)
+        space = env.action_space
+        if not isinstance(space, gym.spaces.Box):
+            raise TypeError(f"the residual wrapper needs a Box action space, got {space}")
+        # A model trained here saves this space: the zip then names the composition.
+        self.action_space = ResidualBox(space.low, space.high, space.shape, space.dtype,
+                                        controller=controller,
+                                        controller_kwargs=controller_kwargs, scale=self.scale)
         self._obs: np.ndarray | None = None
 
     def reset(self, **kwargs):
@@ -97,6 +177,25 @@ class ResidualPolicy:
         if not hasattr(model, "predict"):
             raise TypeError(f"model needs SB3's predict(), got {type(model).__name__}")
         self.model, self.baseline, self.scale = model, baseline, _check_scale(scale)
+
+    @classmethod
+    def from_model(cls, model: Any, env: gym.Env) -> ResidualPolicy:
+        """The composed policy of a model trained on :class:`ResidualActionWrapper`, for ``env``.
+
+        For users of ``PPO.load(...)``: the model's own ``predict`` returns the residual only.
+
+        Raises
+        ------
+        ValueError
+            If the model records no residual composition (it was trained on the plain env).
+        """
+        options = residual_composition(model)
+        if options is None:
+            raise ValueError(f"{type(model).__name__} records no residual composition: it "
+                             "was trained on the plain env, use it as it is")
+        scale = options.pop("scale")
+        controller = options.pop("controller")
+        return cls(model, baseline_controller(env, controller, **options), scale)
 
     def reset(self) -> None:
         """Forget the baseline's internal state (a new episode starts)."""

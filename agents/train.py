@@ -7,7 +7,9 @@ run folder::
 
     OUT/config.json          the exact configuration (env id and kwargs, algorithm,
                              hyperparameters, seed, versions) and, at the end, the wall time
-    OUT/model.zip            the final model
+    OUT/model.zip            the final model (a residual model's zip records its composition)
+    OUT/interrupted.zip      the model so far, if the run was interrupted (Ctrl-C); then
+                             config.json says ``"interrupted": true`` and ``timesteps_done``
     OUT/checkpoints/         model_<steps>_steps.zip along the run
     OUT/logs/progress.csv    SB3's training log; TensorBoard events beside it
 
@@ -15,12 +17,24 @@ run folder::
 :class:`~slipenv.agents.residual.ResidualPolicy`) through the one rollout loop over distinct
 seeds and reports the true cross-track error, so agents and the baseline are compared by the
 same code. :func:`load_policy` turns a run folder back into a policy for the plain env.
+
+SB3 trains whole rollouts: PPO collects ``n_steps × n_envs`` steps between updates, SAC and TD3
+``train_freq × n_envs``, and ``learn`` stops at the first rollout that reaches the total. The
+run's ``total_timesteps`` is therefore the request rounded up to whole rollouts
+(:func:`planned_timesteps`), so what is printed and recorded is what runs; the request is kept
+as ``requested_timesteps``. Rounding ``n_steps`` down instead would change the algorithm (its
+advantage horizon and minibatch split) with the run length.
 """
 
 from __future__ import annotations
 
+import inspect
 import json
+import math
+import os
+import signal
 import time
+import warnings
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -39,7 +53,7 @@ from slipenv.estimators.lindgren.ekf import warm_up
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.rollout import TrajectoryRecorder, rollout
 
-from .residual import ResidualActionWrapper, ResidualPolicy
+from .residual import ResidualActionWrapper, ResidualPolicy, residual_composition
 from .zoo import Hyperparams, algo_kwargs_for_sb3, hyperparams_path, parse, read_entry
 
 ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"ppo": PPO, "sac": SAC, "td3": TD3}
@@ -113,6 +127,7 @@ class TrainConfig:
     env_id: str
     algo: str
     total_timesteps: int
+    requested_timesteps: int
     seed: int
     n_envs: int
     residual: bool
@@ -124,6 +139,36 @@ class TrainConfig:
     hyperparams_file: str
     slipenv_version: str
     stable_baselines3_version: str
+
+
+def planned_timesteps(algo: str, requested: int, n_envs: int, hyperparameters: dict) -> int:
+    """Env steps SB3 will run for a request: rounded up to whole rollouts.
+
+    PPO stops after the first rollout of ``n_steps × n_envs`` steps that reaches the total,
+    SAC and TD3 after the first of ``train_freq × n_envs`` (a ``train_freq`` counted in
+    episodes has no fixed length: the request is returned).
+    """
+    params = inspect.signature(ALGORITHMS[algo]).parameters
+    if algo == "ppo":
+        per_env = hyperparameters.get("n_steps", params["n_steps"].default)
+    else:
+        freq = hyperparameters.get("train_freq", params["train_freq"].default)
+        if isinstance(freq, list | tuple):
+            if len(freq) != 2 or str(freq[1]) != "step":
+                return int(requested)
+            freq = freq[0]
+        per_env = freq
+    rollout = int(per_env) * int(n_envs)
+    return math.ceil(int(requested) / rollout) * rollout
+
+
+def timesteps_note(config: TrainConfig) -> str | None:
+    """One line saying why the run is longer than requested, or None if it is not."""
+    if config.total_timesteps == config.requested_timesteps:
+        return None
+    unit = "n_steps" if config.algo == "ppo" else "train_freq"
+    return (f"{config.requested_timesteps} steps requested; {config.algo} trains whole rollouts "
+            f"of {unit} × n_envs, so {config.total_timesteps} will run")
 
 
 def resolve_config(env_id: str, algo: str = "ppo", total_timesteps: int | None = None,
@@ -153,10 +198,12 @@ def resolve_config(env_id: str, algo: str = "ppo", total_timesteps: int | None =
     source = Path(hyperparams) if hyperparams is not None else hyperparams_path(algo)
     entry = {**read_entry(env_id, source), **(algo_kwargs or {})}
     hp = parse(entry, ALGORITHMS[algo], f"{source} [{env_id}]")
+    requested, envs = int(total_timesteps or hp.n_timesteps), int(n_envs or hp.n_envs)
     config = TrainConfig(
         env_id=env_id, algo=algo,
-        total_timesteps=int(total_timesteps or hp.n_timesteps), seed=int(seed),
-        n_envs=int(n_envs or hp.n_envs), residual=hp.residual if residual is None else residual,
+        total_timesteps=planned_timesteps(algo, requested, envs, hp.algo_kwargs),
+        requested_timesteps=requested, seed=int(seed),
+        n_envs=envs, residual=hp.residual if residual is None else residual,
         residual_scale=hp.residual_scale, policy=hp.policy,
         env_kwargs={**hp.env_kwargs, **env_kwargs}, hyperparameters=hp.algo_kwargs,
         action_noise=list(hp.noise) if hp.noise else None, hyperparams_file=str(source),
@@ -170,7 +217,8 @@ def train(env_id: str, algo: str = "ppo", total_timesteps: int | None = None, se
           n_envs: int | None = None, residual: bool | None = None, out: str | Path | None = None,
           progress: bool = False, algo_kwargs: dict | None = None,
           hyperparams: str | Path | None = None, checkpoint_freq: int | None = None,
-          log_formats: tuple[str, ...] = ("csv", "tensorboard"), **env_kwargs: Any):
+          log_formats: tuple[str, ...] = ("csv", "tensorboard"),
+          callbacks: list[BaseCallback] | None = None, **env_kwargs: Any):
     """Train an agent; returns the SB3 model.
 
     Parameters
@@ -179,7 +227,8 @@ def train(env_id: str, algo: str = "ppo", total_timesteps: int | None = None, se
         A registered id.
     algo : {"ppo", "sac", "td3"}
     total_timesteps, n_envs : int, optional
-        Default: the hyperparameter file's ``n_timesteps`` and ``n_envs``.
+        Default: the hyperparameter file's ``n_timesteps`` and ``n_envs``. The steps run are
+        ``total_timesteps`` rounded up to whole rollouts (:func:`planned_timesteps`).
     seed : int
         Seeds the algorithm and the envs (env k gets ``seed + k``).
     residual : bool, optional
@@ -196,14 +245,30 @@ def train(env_id: str, algo: str = "ppo", total_timesteps: int | None = None, se
         Env steps between checkpoints (default: a quarter of the run); 0 disables them.
     log_formats : tuple of str
         SB3 logger outputs written to ``OUT/logs`` (add ``"stdout"`` for its tables).
+    callbacks : list of SB3 callbacks, optional
+        Run along the built-in ones.
     **env_kwargs
         ``gymnasium.make`` keyword arguments (override the file's ``env_kwargs``).
+
+    Raises
+    ------
+    KeyboardInterrupt
+        On Ctrl-C, after saving the model so far as ``OUT/interrupted.zip`` (see the module
+        docstring).
+    ValueError
+        On bad arguments or hyperparameters (before any env is built where possible).
+
+    Warns
+    -----
+    UserWarning
+        When ``n_envs`` exceeds the CPU cores (the envs then share cores and run slower).
     """
     config, hp = resolve_config(env_id, algo, total_timesteps, seed, n_envs, residual,
                                 hyperparams, algo_kwargs, **env_kwargs)
     run_dir = Path(out) if out is not None else None
     if run_dir is not None:
         run_dir.mkdir(parents=True, exist_ok=True)
+        (run_dir / "interrupted.zip").unlink(missing_ok=True)  # an earlier run's, not this one's
         (run_dir / "config.json").write_text(json.dumps(asdict(config), indent=2) + "\n")
     t0 = time.perf_counter()
 
@@ -211,86 +276,161 @@ def train(env_id: str, algo: str = "ppo", total_timesteps: int | None = None, se
         return make_env(config.env_id, config.residual, config.residual_scale,
                         **config.env_kwargs)
 
+    cores = os.cpu_count() or 1
+    if config.n_envs > cores:
+        warnings.warn(f"n_envs={config.n_envs} exceeds the {cores} CPU cores: the envs share "
+                      f"them and train slower than n_envs={cores}", stacklevel=2)
     vec_cls = SubprocVecEnv if config.n_envs > 1 else DummyVecEnv
     if config.n_envs > 1:
         warm_up()  # the Lindgren EKF compiled once here, not by every worker on a cold cache
-    vec = make_vec_env(env_fn, n_envs=config.n_envs, seed=config.seed, vec_env_cls=vec_cls)
+    vec = make_vec_env(_IgnoringSigint(env_fn) if config.n_envs > 1 else env_fn,
+                       n_envs=config.n_envs, seed=config.seed, vec_env_cls=vec_cls)
+    interrupted = False
     try:
         action_space = vec.action_space
         if not isinstance(action_space, gym.spaces.Box):
             raise TypeError(f"{config.env_id}: {algo} needs a Box action space, got "
                             f"{action_space}")
         kwargs = algo_kwargs_for_sb3(config.hyperparameters, action_space.shape[0], hp.noise)
-        model = ALGORITHMS[algo](config.policy, vec, seed=config.seed, verbose=0, device="cpu",
-                                 **kwargs)
-        callbacks: list[BaseCallback] = []
+        try:
+            model = ALGORITHMS[algo](config.policy, vec, seed=config.seed, verbose=0,
+                                     device="cpu", **kwargs)
+        except AssertionError as exc:  # SB3 checks some combinations only here
+            raise ValueError(f"{hp.source}: {algo} rejects these hyperparameters: "
+                             f"{str(exc).strip() or 'assertion failed'}") from None
+        all_callbacks: list[BaseCallback] = []
         if run_dir is not None:
             model.set_logger(configure(str(run_dir / "logs"), list(log_formats)))
             freq = (max(config.total_timesteps // 4, 1) if checkpoint_freq is None
                     else int(checkpoint_freq))
             if freq > 0:
-                callbacks.append(CheckpointCallback(max(freq // config.n_envs, 1),
-                                                    str(run_dir / "checkpoints"), "model"))
+                all_callbacks.append(CheckpointCallback(max(freq // config.n_envs, 1),
+                                                        str(run_dir / "checkpoints"), "model"))
         if progress:
-            callbacks.append(TqdmProgress(config.total_timesteps))
-        model.learn(total_timesteps=config.total_timesteps, callback=callbacks)
+            all_callbacks.append(TqdmProgress(config.total_timesteps))
+        all_callbacks.extend(callbacks or [])
+        try:
+            model.learn(total_timesteps=config.total_timesteps, callback=all_callbacks)
+        except KeyboardInterrupt:
+            interrupted = True
+            if run_dir is not None:  # the model so far, whatever step Ctrl-C hit
+                model.save(run_dir / "interrupted")
+                _write_record(run_dir, config, t0, model, interrupted=True)
+            raise
     finally:
-        vec.close()
+        _close(vec, quietly=interrupted)
         if run_dir is not None and "model" in locals():
             model.logger.close()  # flush and close progress.csv and the TensorBoard writer
     if run_dir is not None:
         model.save(run_dir / "model")
-        record = {**asdict(config), "wall_time_s": round(time.perf_counter() - t0, 2),
-                  "timesteps_done": int(model.num_timesteps)}
-        (run_dir / "config.json").write_text(json.dumps(record, indent=2) + "\n")
+        _write_record(run_dir, config, t0, model)
     return model
 
 
+def _write_record(run_dir: Path, config: TrainConfig, t0: float, model: BaseAlgorithm,
+                  interrupted: bool = False) -> None:
+    """``config.json`` completed with the wall time and the steps done."""
+    record = {**asdict(config), "wall_time_s": round(time.perf_counter() - t0, 2),
+              "timesteps_done": int(model.num_timesteps)}
+    if interrupted:
+        record["interrupted"] = True
+    (run_dir / "config.json").write_text(json.dumps(record, indent=2) + "\n")
+
+
+class _IgnoringSigint:
+    """An env factory for ``SubprocVecEnv`` workers that leaves Ctrl-C to the main process.
+
+    A terminal's Ctrl-C reaches every process of the group: workers that died of it would
+    leave the main process nothing to save the model with, and print one traceback each.
+    """
+
+    def __init__(self, env_fn: Any) -> None:
+        self.env_fn = env_fn
+
+    def __call__(self) -> gym.Env:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        return self.env_fn()
+
+
+def _close(vec: Any, quietly: bool) -> None:
+    """Close the envs; after Ctrl-C a worker may already be gone, which must not hide it."""
+    try:
+        vec.close()
+    except (EOFError, OSError):  # a broken pipe or a reset connection
+        if not quietly:
+            raise
+
+
 def load_policy(run: str | Path, env: gym.Env | None = None):
-    """A trained run as a policy for the *plain* env (the residual composed with the baseline).
+    """A trained model as a policy for the *plain* env (a residual composed with its baseline).
 
     Parameters
     ----------
     run : path
-        A run folder (with ``config.json`` and ``model.zip``) or the ``.zip`` inside one.
+        A run folder (with ``config.json`` and ``model.zip``), or a ``.zip`` -- inside a run
+        folder or anywhere (the zip records a residual composition; without ``config.json``
+        pass ``env``).
     env : gymnasium.Env, optional
         The env the policy will drive: the baseline's gains come from its vehicle and path
-        (needed for a residual run; default: ``gym.make`` of the run's env id and kwargs).
+        (needed for a residual model; default: ``gym.make`` of the run's env id and kwargs).
 
     Returns
     -------
     (policy, config) : (object with ``predict``, dict)
+        ``config`` is the run's ``config.json`` (``{"algo": ...}`` for a bare zip).
+
+    Raises
+    ------
+    ValueError
+        If ``run`` is not a model or run folder, or a residual model has no env to drive.
     """
+    from slipenv.evaluation.policies import detect_algo
+
     path = Path(run)
     folder = path.parent if path.suffix == ".zip" else path
     model_file = path if path.suffix == ".zip" else folder / "model.zip"
     config_file = folder / "config.json"
-    if not model_file.is_file() or not config_file.is_file():
+    if not model_file.is_file() or (path.suffix != ".zip" and not config_file.is_file()):
         raise ValueError(f"{run}: not a slipenv training run (needs model.zip and config.json)")
-    config = json.loads(config_file.read_text())
-    model = ALGORITHMS[config["algo"]].load(model_file, device="cpu")
-    if not config.get("residual"):
+    config = json.loads(config_file.read_text()) if config_file.is_file() else {}
+    algo = config.get("algo") or detect_algo(model_file)
+    config.setdefault("algo", algo)
+    model = ALGORITHMS[algo].load(model_file, device="cpu")
+    options = residual_composition(model)
+    if options is None and config.get("residual"):  # saved before zips recorded it
+        options = {"controller": "yamauchi", "scale": config.get("residual_scale", 0.3)}
+    if options is None:
         return model, config
+    if env is None and "env_id" not in config:
+        raise ValueError(f"{run}: a residual model adds to a baseline whose gains come from "
+                         "the env: pass env=")
     own = env is None
     env = env or make_env(config["env_id"], **config.get("env_kwargs", {}))
     try:
-        baseline = baseline_controller(env)
+        scale, controller = options.pop("scale"), options.pop("controller")
+        baseline = baseline_controller(env, controller, **options)
     finally:
         if own:
             env.close()
-    return ResidualPolicy(model, baseline, config.get("residual_scale", 0.3)), config
+    return ResidualPolicy(model, baseline, scale), config
 
 
 def evaluate(policy, env_id: str, n_episodes: int = 3, seed: int = 100,
              residual: bool = False, **env_kwargs: Any) -> Evaluation:
     """Evaluate ``policy`` (anything with SB3's ``predict``) over seeds ``seed .. seed+n-1``.
 
-    ``policy="baseline"`` evaluates the baseline path follower itself. ``residual=True`` wraps
-    the env for a model trained on the residual (its action is the residual).
+    ``policy="baseline"`` evaluates the baseline path follower itself. A model trained on the
+    residual wrapper acts through it, with the composition its action space records;
+    ``residual=True`` wraps the env (default scale) for one that records none.
     """
     if n_episodes < 1:
         raise ValueError(f"n_episodes must be >= 1, got {n_episodes}")
-    env = make_env(env_id, residual, **env_kwargs)
+    options = None if isinstance(policy, str) else residual_composition(policy)
+    env: gym.Env
+    if options is not None:
+        env = ResidualActionWrapper(make_env(env_id, **env_kwargs), **options)
+    else:
+        env = make_env(env_id, residual, **env_kwargs)
     try:
         if isinstance(policy, str) and policy == "baseline":
             policy = baseline_controller(env)

@@ -18,11 +18,29 @@ class                             what it is
 :mod:`.consistency` holds the NEES/NIS χ² checks used to judge a filter.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from .base import Estimator, OdometryGeometry
 from .dead_reckoning import DeadReckoning
 from .gyrodometry import Gyrodometry
-from .lindgren import LindgrenEKF, LindgrenNoise, OracleSoil, Scheme
 from .skid_steer import EndoOdometry, SlipAngleModel, SlipCompensatedOdometry
+
+if TYPE_CHECKING:
+    from .lindgren import LindgrenEKF, LindgrenNoise, OracleSoil, Scheme
+
+# The Lindgren filter is compiled by numba, whose import alone takes about a second: it loads
+# when first asked for, so the envs and tools that never use it do not pay for it.
+_LAZY = {"LindgrenEKF", "LindgrenNoise", "OracleSoil", "Scheme"}
+
+
+def __getattr__(name: str) -> object:
+    if name in _LAZY:
+        from . import lindgren
+
+        return getattr(lindgren, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = [
     "DeadReckoning",

@@ -11,6 +11,8 @@
 
 Every input is checked before any long work starts (env ids against the Gymnasium registry,
 numbers, output paths by writing to them); a bad one exits with status 2 and one line.
+Ctrl-C exits with status 130 and one line: where the partial results are, or that nothing was
+written.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import argparse
 import dataclasses
 import json
 import sys
-import tempfile
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Protocol
@@ -27,6 +29,14 @@ from typing import Any, Protocol
 import gymnasium as gym
 
 import slipenv
+from slipenv.cli_outputs import (
+    INTERRUPTED_STATUS,
+    interrupted_message,
+    output_dir,
+    output_file,
+    partial_results,
+)
+from slipenv.cli_types import non_negative_int, positive_int
 from slipenv.contracts.names import did_you_mean
 from slipenv.evaluation import evaluate_cli, sweep_cli
 from slipenv.testbed import cli as testbed_cli
@@ -44,7 +54,12 @@ Handler = Callable[[argparse.Namespace], int]
 
 
 class _Formatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
-    """Shows every option's default; keeps descriptions as written."""
+    """Shows every optional option's default; keeps descriptions as written."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        if action.required:  # a default the user must replace is not one to show
+            return action.help
+        return super()._get_help_string(action)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -66,36 +81,6 @@ def env_id(text: str) -> str:
     known = sorted(e for e in gym.registry if e.startswith("slipenv/"))
     raise argparse.ArgumentTypeError(f"unknown env id {text!r}{did_you_mean(text, known)} "
                                      f"(registered: {', '.join(known)})")
-
-
-def _integer(text: str, low: int, what: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-    if value < low:
-        raise argparse.ArgumentTypeError(f"must be {what}, got {value}")
-    return value
-
-
-def positive_int(text: str) -> int:
-    """An integer >= 1."""
-    return _integer(text, 1, ">= 1")
-
-
-def non_negative_int(text: str) -> int:
-    """An integer >= 0 (seeds)."""
-    return _integer(text, 0, ">= 0")
-
-
-def existing_dir(text: str) -> str:
-    """A log folder that exists."""
-    path = Path(text)
-    if not path.exists():
-        raise argparse.ArgumentTypeError(f"no such log folder: {text!r}")
-    if not path.is_dir():
-        raise argparse.ArgumentTypeError(f"{text!r} is not a folder")
-    return text
 
 
 def _one_of(text: str, known, what: str) -> str:
@@ -130,30 +115,6 @@ def soil_name(text: str) -> str:
 
 WORLD_EXPERIMENTS = ("yamauchi",)
 """The experiments whose world ``--vehicle``/``--soil`` can change."""
-
-
-def writable_dir(path: str | Path, option: str) -> Path:
-    """Create ``path`` and prove it writable with a temporary file (``ValueError`` if not)."""
-    folder = Path(path)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=folder):
-            pass
-    except OSError as exc:
-        raise ValueError(f"{option} {str(path)!r}: cannot write there "
-                         f"({exc.strerror or exc})") from None
-    return folder
-
-
-def writable_file(path: str | Path | None, option: str) -> Path | None:
-    """Check that ``path`` (a file to write) can be written, before any work."""
-    if path is None:
-        return None
-    file = Path(path)
-    if file.is_dir():
-        raise ValueError(f"{option} {str(path)!r} is a folder, not a file")
-    writable_dir(file.parent if str(file.parent) else ".", option)
-    return file
 
 
 def _write_json(path: Path, data: dict) -> None:
@@ -195,8 +156,8 @@ def add_run(sub: SubParsers) -> argparse.ArgumentParser:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    out_dir = writable_dir(_fill(args.out, env=_short_name(args.env_id)), "--out")
-    json_path = writable_file(args.json, "--json")
+    out_dir = output_dir(_fill(args.out, env=_short_name(args.env_id)), "--out")
+    json_path = output_file(args.json, "--json")
     from slipenv.evaluation.policies import BUILTIN_POLICIES
     from slipenv.run import completion_text, format_table, plot_episode, run_episode, summarize
 
@@ -206,13 +167,14 @@ def cmd_run(args: argparse.Namespace) -> int:
     stats = summarize(rec)
     print(format_table(stats, f"{args.env_id}  seed {args.seed}  controller {controller}"))
     print(completion_text(rec))
-    png = plot_episode(rec, out_dir / "trajectory.png")
-    print(f"trajectory plot: {png}")
-    if json_path is not None:
-        _write_json(json_path, {"env_id": args.env_id, "seed": args.seed,
-                                "controller": controller, "metrics": stats,
-                                "success": rec.success, "end_reason": rec.end_reason})
-        print(f"metrics: {json_path}")
+    with partial_results(out_dir):
+        png = plot_episode(rec, out_dir / "trajectory.png")
+        print(f"trajectory plot: {png}")
+        if json_path is not None:
+            _write_json(json_path, {"env_id": args.env_id, "seed": args.seed,
+                                    "controller": controller, "metrics": stats,
+                                    "success": rec.success, "end_reason": rec.end_reason})
+            print(f"metrics: {json_path}")
     return 0
 
 
@@ -231,7 +193,7 @@ def add_bench(sub: SubParsers) -> argparse.ArgumentParser:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    json_path = writable_file(args.json, "--json")
+    json_path = output_file(args.json, "--json")
     from slipenv.bench import format_bench, run_bench
 
     ids = args.env_ids or sorted(e for e in gym.registry if e.startswith("slipenv/"))
@@ -261,11 +223,11 @@ def add_reproduce(sub: SubParsers) -> argparse.ArgumentParser:
                    help="write the page DIR/NAME.md (yamauchi in another world: "
                         "DIR/yamauchi_<world>.md)")
     p.add_argument("--vehicle", type=tracked_vehicle_name, default=None,
-                   help="yamauchi: run on this tracked vehicle preset (default "
-                        "tracked_patako_wong_chiang: the Wong-Chiang track model; "
+                   help="yamauchi: run on this tracked vehicle preset (None: "
+                        "tracked_patako_wong_chiang, the Wong-Chiang track model; "
                         "tracked_patako: the env's per-wheel law)")
     p.add_argument("--soil", type=soil_name, default=None,
-                   help="yamauchi: run on this soil preset (default dry_sand; toyoura_sand: "
+                   help="yamauchi: run on this soil preset (None: dry_sand; toyoura_sand: "
                         "the env's; --vehicle tracked_patako --soil toyoura_sand is the env's "
                         "world, the one --save-model needs)")
     return p
@@ -290,9 +252,10 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
             raise ValueError("--save-model writes the model the env observes with, fitted in "
                              "the env's own world: add --vehicle tracked_patako --soil "
                              f"toyoura_sand (this run's world: {vehicle} on {soil})")
-    out_dir = writable_dir(_fill(args.out, name=args.name), "--out")
-    json_path = writable_file(args.json, "--json")
-    docs_dir = None if args.docs is None else str(writable_dir(args.docs, "--docs"))
+    out_dir = output_dir(_fill(args.out, name=args.name), "--out")
+    json_path = output_file(args.json, "--json")
+    output_file(args.save_model, "--save-model")
+    docs_dir = None if args.docs is None else str(output_dir(args.docs, "--docs"))
     from slipenv.experiments import experiment
 
     run = experiment(args.name)
@@ -301,31 +264,24 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         from slipenv.experiments.yamauchi import FULL, QUICK
 
         extra["settings"] = dataclasses.replace(QUICK if args.quick else FULL, **world)
-    result = run(quick=args.quick, out_dir=str(out_dir),
-                 json_path=None if json_path is None else str(json_path), seed=args.seed,
-                 progress=not args.quiet, docs_dir=docs_dir, **extra)
+    with partial_results(out_dir):
+        result = run(quick=args.quick, out_dir=str(out_dir),
+                     json_path=None if json_path is None else str(json_path), seed=args.seed,
+                     progress=not args.quiet, docs_dir=docs_dir, **extra)
     return 0 if result is not None else 1
 
 
 # -- diagnose ------------------------------------------------------------------------------
 def add_diagnose(sub: SubParsers) -> argparse.ArgumentParser:
-    p = sub.add_parser("diagnose", help="diagnose a measured log (slipenv-log/1)")
-    p.add_argument("log_dir", type=existing_dir, help="folder with meta.json and signals.csv")
-    p.add_argument("--json", default=None, help="write the diagnosis report to this JSON file")
-    p.add_argument("--report", default=None,
-                   help="folder for the human report (plots + text; None: no report)")
-    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed of the fit")
-    p.add_argument("--jobs", type=positive_int, default=None,
-                   help="processes the fits run on (default: every core this process may "
-                        "use); the diagnosis is the same whatever the number")
-    p.add_argument("--quiet", action="store_true", help="no progress bars")
-    return p
+    from slipenv.diagnose.cli import add_parser
+
+    return add_parser(sub)
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    writable_file(args.json, "--json")
+    output_file(args.json, "--json")
     if args.report is not None:
-        writable_dir(args.report, "--report")
+        output_dir(args.report, "--report")
     from slipenv.diagnose.cli import main as diagnose_main
 
     return diagnose_main(args)
@@ -361,22 +317,30 @@ def add_train(sub: SubParsers) -> argparse.ArgumentParser:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from slipenv.agents.train import evaluate, load_policy, resolve_config, train
+    from slipenv.agents.train import evaluate, load_policy, resolve_config, timesteps_note, train
 
     config, _ = resolve_config(args.env_id, args.algo, args.timesteps, args.seed, args.n_envs,
                                args.residual, args.hyperparams)  # a bad file fails here
-    out_dir = writable_dir(_fill(args.out, env=_short_name(args.env_id), algo=args.algo,
-                                 seed=args.seed), "--out")
+    out_dir = output_dir(_fill(args.out, env=_short_name(args.env_id), algo=args.algo,
+                               seed=args.seed), "--out")
     print(f"training {config.algo} on {config.env_id}: {config.total_timesteps} steps, "
           f"{config.n_envs} env(s), residual={config.residual}, seed {config.seed} -> {out_dir}")
+    note = timesteps_note(config)
+    if note:
+        print(note)
     formats = ("csv", "tensorboard") if args.quiet else ("stdout", "csv", "tensorboard")
-    train(args.env_id, algo=args.algo, total_timesteps=args.timesteps, seed=args.seed,
-          n_envs=args.n_envs, residual=args.residual, out=out_dir, progress=not args.quiet,
-          hyperparams=args.hyperparams, checkpoint_freq=args.checkpoint_freq,
-          log_formats=formats)
-    policy, _ = load_policy(out_dir)
-    agent = evaluate(policy, args.env_id, n_episodes=args.episodes, **config.env_kwargs)
-    baseline = evaluate("baseline", args.env_id, n_episodes=args.episodes, **config.env_kwargs)
+    # train() saves OUT/interrupted.zip on Ctrl-C; before the model exists only logs are there.
+    with partial_results(out_dir / "interrupted.zip", out_dir):
+        train(args.env_id, algo=args.algo, total_timesteps=args.timesteps, seed=args.seed,
+              n_envs=args.n_envs, residual=args.residual, out=out_dir,
+              progress=not args.quiet, hyperparams=args.hyperparams,
+              checkpoint_freq=args.checkpoint_freq, log_formats=formats)
+    with partial_results(out_dir / "model.zip",
+                         note="training finished; its evaluation did not"):
+        policy, _ = load_policy(out_dir)
+        agent = evaluate(policy, args.env_id, n_episodes=args.episodes, **config.env_kwargs)
+        baseline = evaluate("baseline", args.env_id, n_episodes=args.episodes,
+                            **config.env_kwargs)
     print(f"evaluation on seeds {', '.join(map(str, agent.seeds))}:")
     print(f"{'policy':<10} {'return':>10} {'± std':>8} {'mean |cross-track| [m]':>24} "
           f"{'success':>8}")
@@ -412,7 +376,9 @@ SUBCOMMANDS: dict[str, tuple[Builder, Handler]] = {
 }
 """name -> (function adding its sub-parser, handler returning the exit status). A new command
 is one entry: its builder calls ``sub.add_parser(name, help=...)`` (one-line errors and shown
-defaults come with it) and adds its arguments; its handler checks outputs, then works."""
+defaults come with it) and adds its arguments; its handler checks outputs
+(``slipenv.cli_outputs.output_dir``/``output_file``), then works, inside
+``partial_results(PATH)`` where a Ctrl-C would leave something at PATH."""
 NEEDS_NO_PHYSICS = ("list",)
 
 
@@ -426,21 +392,42 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Entry point; returns the exit status (2: bad input, one line on stderr)."""
-    try:
-        args = build_parser().parse_args(argv)
-    except SystemExit as exc:  # argparse: --help, --version, or a usage error already printed
-        return int(exc.code or 0)
-    if args.command not in NEEDS_NO_PHYSICS:
-        from slipenv.pybullet_quiet import import_pybullet
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
+                      lineno: int, line: str | None = None) -> str:
+    return f"warning: {message}\n"
 
-        import_pybullet()  # first import of PyBullet in the process: no build-time banner
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point; returns the exit status (2: bad input, one line on stderr; 130: Ctrl-C,
+    one line saying where the partial results are, if any)."""
+    command = "slipenv"
     try:
-        return args.func(args)
+        try:
+            args = build_parser().parse_args(argv)
+        except SystemExit as exc:  # argparse: --help, --version, or a usage error already printed
+            return int(exc.code or 0)
+        command = f"slipenv {args.command}"
+        if args.command not in NEEDS_NO_PHYSICS:
+            from slipenv.pybullet_quiet import import_pybullet
+
+            import_pybullet()  # first import of PyBullet in the process: no build-time banner
+        # A warning is one line on a terminal ("warning: ..."), not Python's two with the
+        # source line; restored after, so callers of main() keep their own format.
+        default_format = warnings.formatwarning
+        warnings.formatwarning = _one_line_warning
+        try:
+            return args.func(args)
+        finally:
+            warnings.formatwarning = default_format
     except ValueError as exc:
-        print(f"slipenv {args.command}: error: {exc}".splitlines()[0], file=sys.stderr)
+        print(f"{command}: error: {exc}".splitlines()[0], file=sys.stderr)
         return 2
+    except KeyboardInterrupt as exc:
+        # A handler marks what it leaves behind with ``partial_results``; the rest of the
+        # traceback (tens of lines of the simulator's internals) tells the user nothing.
+        fresh_line = "\n" if sys.stderr.isatty() else ""  # after the terminal's "^C"
+        print(f"{fresh_line}{command}: {interrupted_message(exc)}", file=sys.stderr)
+        return INTERRUPTED_STATUS
 
 
 if __name__ == "__main__":

@@ -25,6 +25,8 @@ FOLDERS = {"slipenv": "slipenv", "estimators": "slipenv.estimators",
 
 LAYERS: dict[str, int] = {
     "slipenv.contracts": 0,
+    # standard library only: every command checks its outputs and arguments the same way
+    "slipenv.cli_outputs": 0, "slipenv.cli_types": 0,
     "slipenv.terramechanics": 1, "slipenv.paths": 1,
     "slipenv.vehicles": 2, "slipenv.terrain": 2,
     "slipenv.sim": 3,

@@ -58,6 +58,9 @@ def test_the_wheel_has_one_top_level_name(wheel):
     assert "slipenv/controllers/__init__.py" in names
     assert "slipenv/agents/__init__.py" in names
     assert any(n.startswith("slipenv/data/") and n.endswith(".json") for n in names)
+    # the example logs, with their licences, so `slipenv diagnose --example` works from a wheel
+    for name in ("synthetic/signals.csv", "optiodom/LICENSE", "borealtc/ATTRIBUTION.md"):
+        assert f"slipenv/data/examples/{name}" in names, name
 
 
 def test_installed_wheel_imports_only_under_slipenv(wheel, tmp_path):
@@ -97,3 +100,14 @@ def test_importing_slipenv_loads_neither_numba_nor_the_estimators():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip().splitlines()[-1] == "[]"
+
+
+def test_the_estimators_that_need_no_compiler_load_without_numba_or_scipy_stats():
+    """The Lindgren filter (numba) and the Endo fit's interval (scipy.stats) load when used:
+    an env with gyrodometry or Endo odometry does not pay a second for them."""
+    code = ("import sys; from slipenv.estimators import Gyrodometry, EndoOdometry; "
+            "print(sorted(m for m in ('numba', 'scipy.stats') if m in sys.modules)); "
+            "from slipenv.estimators import LindgrenEKF; print('numba' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip().splitlines()[-2:] == ["[]", "True"]

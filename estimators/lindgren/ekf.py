@@ -45,6 +45,7 @@ from .params import LindgrenNoise, Scheme, parse_scheme
 __all__ = ["LindgrenEKF", "LindgrenNoise", "OracleSoil", "Scheme", "parse_scheme", "SENSORS"]
 
 logger = logging.getLogger(__name__)
+logger.addHandler(logging.NullHandler())  # records reach the app's handlers, never bare stderr
 _ROUTINE_SKIPS = frozenset({"bearing_gated"})  # counted in extras['skipped'], not logged
 
 SENSORS = ("gyro", "acc", "tilt", "odo", "bearing")  # keys of LindgrenEKF.history

@@ -13,6 +13,10 @@ The slip angle reaches sComp in one of two ways (our design): a callable
 geometric baseline or a log column), or, without one, the last value given to
 :meth:`SCompOdometry.set_slip_angle` (FTrace runs at 5 Hz, the odometry at the control rate:
 the latest measurement is held). NaN measurements are ignored (the previous β is held).
+
+When the slip model has a pitch term (:mod:`.slip_model`), sComp reads the climb angle from the
+inclinometer at every update (``SensorFrame.pitch_rad``, whose positive sense lowers the nose, so
+θ = -pitch); a NaN reading stands for the model's reference climb.
 """
 
 from __future__ import annotations
@@ -103,7 +107,8 @@ class SCompOdometry(CompassOdometry):
     geometry : OdometryGeometry
         Nominal wheel radius and encoder resolution; ``left + right`` are the wheels averaged.
     slip_model : SlipRatioModel
-        s_x(β) of Eq. 12 (fitted on a run with ground truth, Reina §4.3.1).
+        s_x(β) of Eq. 12, optionally with the pitch term (fitted on a run with ground truth,
+        Reina §4.3.1).
     slip_angle_source : callable, optional
         ``f(frame) -> β`` [rad] called at every update; without it the value of
         :meth:`set_slip_angle` is used.
@@ -131,7 +136,8 @@ class SCompOdometry(CompassOdometry):
     def _body_step(self, frame: SensorFrame, wheel_distance_m: float) -> tuple[float, float]:
         if self.slip_angle_source is not None:
             self.set_slip_angle(float(self.slip_angle_source(frame)))
-        self.slip_ratio = float(self.slip_model(self.beta_rad))
+        climb = -float(frame.pitch_rad) if self.slip_model.k_pitch != 0.0 else None
+        self.slip_ratio = float(self.slip_model(self.beta_rad, climb))
         dx = wheel_distance_m * (1.0 - self.slip_ratio)  # Eq. 15 with Eq. 12's sign
         return dx, dx * math.tan(self.beta_rad)  # Eq. 16
 

@@ -21,7 +21,6 @@ from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import stats
 
 from .kinematics import check_tread, slips_from_body_velocity
 
@@ -270,6 +269,9 @@ def fit_endo_n(
     n = float(x @ y) / sxx
     s2 = float(np.sum((y - n * x) ** 2)) / (m - 1)
     se = math.sqrt(s2 / sxx)
+    # scipy.stats takes most of a second to import; only the fit's interval needs it.
+    from scipy import stats
+
     half = float(stats.t.ppf(0.975, m - 1)) * se
     return EndoFit(n=n, std_err=se, ci95=(n - half, n + half), n_samples=m)
 

@@ -1,20 +1,49 @@
-"""``slipenv diagnose LOG_DIR [--json PATH] [--report DIR] [--seed N] [--jobs N] [--quiet]``.
+"""``slipenv diagnose (LOG_DIR | --example [NAME]) [--json PATH] [--report DIR] [--seed N]
+[--jobs N] [--quiet]``.
 
 ``LOG_DIR`` is one slipenv-log/1 folder, or a folder of them (diagnosed together: one vehicle,
 several runs; the held-out comparison then predicts each run with models fitted on other
-runs). Logs without any ground-truth pose get the proprioceptive analysis of
-``proprio.py`` instead (yaw rate against wheel speeds with the gyro as reference).
+runs). ``--example NAME`` diagnoses one of the logs shipped in the package
+(``slipenv.logs.examples``). Logs without any ground-truth pose get the proprioceptive
+analysis of ``proprio.py`` instead (yaw rate against wheel speeds with the gyro as reference).
+A log in which the vehicle does not move is refused: it cannot tell one model from another.
+
+Outputs are checked before any work (``slipenv.cli_outputs``). The reports are written in a
+staging folder beside their target and moved into place only when complete, so a Ctrl-C never
+leaves a report that looks finished: the staging folder is removed (after a hard kill its
+``.partial`` name says what it is).
 """
 
 from __future__ import annotations
 
+import argparse
+import os
+import shutil
+import tempfile
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
+from slipenv.cli_types import non_negative_int, positive_int
 from slipenv.logs.errors import LogFormatError
 from slipenv.logs.io import META_FILE, read_log
 from slipenv.logs.log import GT_COLUMNS, Log
+
+DESCRIPTION = """\
+Replay a slipenv-log/1 log (or a folder of logs of one vehicle), fit every effect of the
+vocabulary and name the cause held-out data support; --json and --report write the results.
+Logs without ground truth get a proprioceptive analysis (gyro against wheel speeds). A log in
+which the vehicle does not move is refused: it cannot tell one model from another."""
+
+STILL_TRAVEL_M = 0.05
+"""[m] Below this span of every wheel's travel and of the ground-truth position, the vehicle
+does not move (about a tyre's contact patch; encoder jitter and OptiTrack noise stay below)."""
+STILL_YAW_RAD = 0.05
+"""[rad] Below this span of the ground-truth heading (3 deg), the vehicle does not turn."""
 
 if TYPE_CHECKING:  # as in diagnose(): the fitting stack (scipy) loads only when a fit runs
     from slipenv.diagnose.fit import Problem
@@ -40,6 +69,33 @@ def load_logs(path: str | Path, require_ground_truth: bool = True) -> list[Log]:
     return [read_log(p, require_ground_truth=require_ground_truth) for p in subs]
 
 
+def moves(log: Log) -> bool:
+    """Whether the vehicle moves in ``log``: a wheel turns through more than
+    ``STILL_TRAVEL_M`` of travel, or the ground truth moves more than ``STILL_TRAVEL_M`` or
+    turns more than ``STILL_YAW_RAD`` (spans between the 1st and 99th percentiles, so a stray
+    sample or sensor noise does not count as motion)."""
+    def span(x: np.ndarray) -> float:
+        x = x[np.isfinite(x)]
+        return float(np.subtract(*np.percentile(x, [99, 1]))) if x.size else 0.0
+
+    r = log.meta.wheel_radius_m
+    if any(span(log.wheel_angle(w)) * r > STILL_TRAVEL_M for w in log.wheels):
+        return True
+    return any(log.has(c) and span(log.signals[c]) > limit
+               for c, limit in (("gt_x", STILL_TRAVEL_M), ("gt_y", STILL_TRAVEL_M),
+                                ("gt_yaw", STILL_YAW_RAD)))
+
+
+def refuse_still(logs: list[Log], where: str) -> None:
+    """``DiagnosisError`` if the vehicle moves in none of ``logs``: nothing to diagnose."""
+    if not any(moves(log) for log in logs):
+        which = "this log" if len(logs) == 1 else f"any of these {len(logs)} logs"
+        raise DiagnosisError(
+            f"{where}: the vehicle does not move in {which} (wheels and ground truth move "
+            f"less than {STILL_TRAVEL_M * 100:.0f} cm and {np.degrees(STILL_YAW_RAD):.0f} deg): "
+            "nothing to diagnose")
+
+
 def _has_truth(folder: Path) -> bool:
     """True unless every log under ``folder`` lacks all ground-truth columns."""
     logs = load_logs(folder, require_ground_truth=False)
@@ -60,6 +116,7 @@ def diagnose(logs: list[Log], where: str, *, progress: bool = False, jobs: int =
     from slipenv.diagnose.select import select
     from slipenv.diagnose.workers import check_jobs, one_blas_thread
 
+    refuse_still(logs, where)
     jobs = check_jobs(jobs)
     try:
         with one_blas_thread():  # the same numbers on every machine (``workers.py``)
@@ -78,21 +135,77 @@ class DiagnosisError(ValueError):
     """A diagnosis that could not be computed; the message names the log(s)."""
 
 
+def add_parser(sub: Any) -> argparse.ArgumentParser:
+    """The ``diagnose`` sub-parser (``sub`` is ``ArgumentParser.add_subparsers()``)."""
+    from slipenv.logs.examples import DESCRIPTIONS, NAMES
+
+    examples = ", ".join(f"{name} ({text})" for name, text in DESCRIPTIONS.items())
+    p = sub.add_parser("diagnose", help="diagnose a measured log (slipenv-log/1)",
+                       description=DESCRIPTION)
+    # SUPPRESS: no "(default: None)" in --help for what is either given or not
+    p.add_argument("log_dir", nargs="?", default=argparse.SUPPRESS, metavar="LOG_DIR",
+                   help="folder with meta.json and signals.csv, or a folder of such folders")
+    p.add_argument("--example", nargs="?", const="synthetic", choices=NAMES, default=None,
+                   metavar="NAME",
+                   help=f"diagnose a log shipped with slipenv instead of LOG_DIR (%(const)s "
+                        f"without NAME): {examples}")
+    p.add_argument("--json", default=None, help="write the diagnosis report to this JSON file")
+    p.add_argument("--report", default=None,
+                   help="folder for the human report (plots + text; None: no report)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed of the fit")
+    p.add_argument("--jobs", type=positive_int, default=None,
+                   help="processes the fits run on (None: every core this process may use); "
+                        "the diagnosis is the same whatever the number")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    return p
+
+
+def log_folder(args) -> Path:
+    """The folder to diagnose: ``LOG_DIR`` or the example's (``ValueError`` if neither/both)."""
+    example, given = getattr(args, "example", None), getattr(args, "log_dir", None)
+    if example is not None:
+        if given is not None:
+            raise ValueError(f"give LOG_DIR or --example, not both ({given!r} and "
+                             f"--example {example})")
+        from slipenv.logs.examples import path
+
+        return path(example)
+    if given is None:
+        raise ValueError("give a log folder (LOG_DIR) or --example NAME")
+    folder = Path(given)
+    if not folder.exists():
+        raise ValueError(f"no such log folder: {given!r}")
+    if not folder.is_dir():
+        raise ValueError(f"{given!r} is not a folder")
+    return folder
+
+
 def main(args) -> int:
-    """Entry point of ``slipenv diagnose`` (see ``slipenv.cli``); returns the exit code."""
+    """Entry point of ``slipenv diagnose`` (see ``slipenv.cli``); returns the exit code.
+
+    Outputs are checked first (again: ``slipenv.cli`` checks them before calling this). A
+    Ctrl-C propagates (``slipenv.cli.main`` prints the one line, status 130) once the staged
+    reports are removed: the JSON path and the report folder then hold nothing of this run.
+    """
+    from slipenv.cli_outputs import output_dir, output_file
     from slipenv.diagnose import report as rep
 
     start = time.perf_counter()
-    folder = Path(args.log_dir)
+    folder = log_folder(args)
+    json_path = output_file(args.json, "--json")
+    report_dir = None if args.report is None else output_dir(args.report, "--report")
     quiet = bool(getattr(args, "quiet", False))
-    if folder.is_dir() and not _has_truth(folder):
+    if not _has_truth(folder):
         from slipenv.diagnose import proprio
 
-        result = proprio.analyse(load_logs(folder, require_ground_truth=False), str(folder))
-        if args.json:
-            rep.write_json(result, args.json)
-        if args.report:
-            proprio.write_report(args.report, result)
+        logs = load_logs(folder, require_ground_truth=False)
+        refuse_still(logs, str(folder))
+        result = proprio.analyse(logs, str(folder))
+        with _staged(json_path, report_dir) as (json_tmp, report_tmp):
+            if json_tmp is not None:
+                rep.write_json(result, json_tmp)
+            if report_tmp is not None:
+                proprio.write_report(report_tmp, result)
         print(proprio.summary(result))
         return 0
     logs = load_logs(folder)
@@ -103,21 +216,56 @@ def main(args) -> int:
         jobs = available_cores()
     report, (sel, problem) = diagnose(logs, str(folder), progress=not quiet, jobs=jobs)
     sim = None
-    if args.report:
+    if report_dir is not None:
         from slipenv.diagnose.simreplay import pybullet_overlay
 
-        sim = pybullet_overlay(logs[0], sel, problem, seed=int(getattr(args, "seed", 0) or 0),
-                               progress=not quiet)
+        sim = pybullet_overlay(logs[0], sel, problem,
+                               seed=int(getattr(args, "seed", 0) or 0), progress=not quiet)
         if sim is not None:
             report["pybullet_replay"] = {k: v for k, v in sim.items()
                                          if k in ("rmse_nominal_m", "rmse_extended_m",
                                                   "segments", "note")}
-    if args.json:
-        rep.write_json(report, args.json)
-    if args.report:
-        rep.write_human_report(args.report, report, sel, problem, sim, logs=logs)
+    with _staged(json_path, report_dir) as (json_tmp, report_tmp):
+        if json_tmp is not None:
+            rep.write_json(report, json_tmp)
+        if report_tmp is not None:
+            rep.write_human_report(report_tmp, report, sel, problem, sim, logs=logs)
     print(summary(report, time.perf_counter() - start))
     return 0
+
+
+@contextmanager
+def _staged(json_path: Path | None, report_dir: Path | None
+            ) -> Iterator[tuple[Path | None, Path | None]]:
+    """Temporary targets beside ``json_path`` and ``report_dir``, moved into place when the
+    block ends normally and removed when it does not (Ctrl-C, an error)."""
+    made: list[Path] = []
+    try:
+        json_tmp = report_tmp = None
+        if json_path is not None:  # created by write_json, with the user's usual permissions
+            json_tmp = json_path.parent / f".{json_path.name}.partial-{os.getpid()}"
+            made.append(json_tmp)
+        if report_dir is not None:
+            report_tmp = Path(tempfile.mkdtemp(prefix=f".{report_dir.name}.partial-",
+                                               dir=report_dir.parent))
+            made.append(report_tmp)
+        yield json_tmp, report_tmp
+        if report_tmp is not None and report_dir is not None:
+            # report.md last: a report folder whose report.md is new is complete
+            entries = sorted(report_tmp.iterdir(), key=lambda p: p.name == "report.md")
+            for entry in entries:
+                target = report_dir / entry.name
+                if target.is_dir() and not target.is_symlink():
+                    shutil.rmtree(target)
+                os.replace(entry, target)
+        if json_tmp is not None and json_path is not None:
+            os.replace(json_tmp, json_path)
+    finally:
+        for tmp in made:
+            if tmp.is_dir():
+                shutil.rmtree(tmp, ignore_errors=True)
+            else:
+                tmp.unlink(missing_ok=True)
 
 
 def summary(report: dict, seconds: float | None = None) -> str:

@@ -28,9 +28,8 @@ fighting one another, which a softer law takes away). Its steering
 fixes the turn (each wheel points along its arc about the commanded centre), so a left/right
 radius difference shows mostly as wheels fighting each other (longitudinal slip), less as
 heading drift than on a differential drive. Its PyBullet body's yaw rate chatters between
-control steps, and the gyro model samples the instantaneous rate at the control rate, so a
-noise-free gyro's integral misses the rover's turn by several per cent: a gyro offset below
-that is not identifiable on these logs (a limit of the simulated sensor, not of the diagnosis).
+control steps; the simulated gyro integrates (it reads the mean rate over each sample
+interval), so a noise-free gyro's integral is the rover's turn.
 
 A skid-steer vehicle never turns as its wheel spacing says (the wheels scrub), so its nominal
 track width is the *effective* one, fitted on a long run of the clean world — as an operator
@@ -219,11 +218,12 @@ class _Drive:
 
 def drive(cfg: SlipEnvConfig, kind: str, rng: np.random.Generator, duration_s: float,
           focus: tuple[float, float] = (0.0, 0.0), columns=None, exact: bool = False,
-          meta_track_m: float | None = None) -> _Drive:
+          meta_track_m: float | None = None, gyro_sampling: str = "mean") -> _Drive:
     """Drive ``cfg``'s world between random waypoints; the run as a log (exact truth/sensors).
 
     Every other waypoint lies near ``focus`` (so a soil patch there is crossed again and
     again); speeds change every 3-8 s between 30 and 90 % of the vehicle's top speed.
+    ``gyro_sampling`` is the gyro's (`slipenv.sensors.onboard.Imu`).
     """
     spec = make_vehicle(cfg.vehicle)
     terrain, world_noise = cfg.terrain, cfg.sensor_noise
@@ -235,7 +235,7 @@ def drive(cfg: SlipEnvConfig, kind: str, rng: np.random.Generator, duration_s: f
                                     gyro_bias_rad_s=world_noise.gyro_bias_rad_s)
     sim = Simulator(spec, terrain, make_force_model(cfg.force_model, spec),
                     make_soil_map(cfg.soil, cfg.soil_map), control_hz=cfg.control_hz)
-    sensors = SensorSuite(spec.counts_per_rad, noise)
+    sensors = SensorSuite(spec.counts_per_rad, noise, gyro_sampling=gyro_sampling)
     nominal = VEHICLES[kind]()
     meta = meta_for(nominal, terrain, "rigid", notes="slipenv.diagnose.synth")
     if meta_track_m is not None:

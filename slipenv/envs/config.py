@@ -17,6 +17,13 @@ from typing import Any
 
 import numpy as np
 
+from slipenv.contracts.observation import (
+    OBS_CURVATURE,
+    OBS_HIGH,
+    OBS_REF_SPEED,
+    OBS_X,
+    OBS_YAW_RATE,
+)
 from slipenv.envs.factory import ForceModelFactory, make_path
 from slipenv.paths import PATHS, Path
 from slipenv.sensors.beacons import BeaconScanner, as_beacons_xy
@@ -91,11 +98,16 @@ class SlipEnvConfig:
         Env step and physics substep rates [Hz].
     max_episode_s : float
         Episode time limit [s] (truncation).
-    max_cross_track_m : float
-        True cross-track error that ends the episode as failed [m].
+    max_cross_track_m : float | None
+        Half-width of the corridor [m]: a true cross-track error beyond it ends the episode
+        as failed, so success means reaching the path's end inside it. ``None`` (default):
+        a corridor that fits the path, :func:`corridor_for` (0.4 of the path's smallest
+        turning radius, at most 2 m).
     reward_weights : dict[str, float]
-        Weights of the named reward terms ``cross_track``, ``heading``, ``progress``,
-        ``effort``; each term's value is reported in ``info["reward_terms"]``.
+        Weights (finite, >= 0) of the named reward terms ``cross_track``, ``heading``,
+        ``progress``, ``effort``; each term's value is reported in ``info["reward_terms"]``.
+        The terms carry their own signs (the penalties are <= 0, progress >= 0), so a
+        negative weight would reward what the term penalises.
     start_jitter : tuple[float, float]
         ``(position_m, yaw_deg)``: ``reset(seed)`` starts the vehicle at the path's start
         moved by a uniform offset within a disc of ``position_m`` [m] and turned by a uniform
@@ -115,8 +127,9 @@ class SlipEnvConfig:
     wheel contact, 1 mm static sinkage, rings at about 16 Hz and is resolved 100 times over,
     while the cost grows with the rate: 0.09 s of wall time per simulated second at 2000 Hz,
     about 5 s at 1e5 Hz) and an integer multiple of ``control_hz``.
-    ``path_kwargs`` must be parameters of the named path builder; ``estimator_kwargs`` are
-    checked by building the estimator when the env is made. This is the one place the options
+    ``path_kwargs`` must be parameters of the named path builder, and the path (named or
+    built) must fit the observation's ranges (:func:`check_path_fits`). ``estimator_kwargs``
+    are checked by building the estimator when the env is made. This is the one place the options
     are checked: the builders (:mod:`slipenv.envs.factory`) and the
     :class:`~slipenv.sim.simulator.Simulator` take the checked values as they are.
     """
@@ -138,7 +151,7 @@ class SlipEnvConfig:
     control_hz: float = 20.0
     physics_hz: float = 240.0
     max_episode_s: float = 120.0
-    max_cross_track_m: float = 2.0
+    max_cross_track_m: float | None = None
     reward_weights: dict[str, float] = field(
         default_factory=lambda: {"cross_track": 1.0, "heading": 0.2, "progress": 1.0,
                                  "effort": 0.05}
@@ -173,7 +186,6 @@ class SlipEnvConfig:
         if isinstance(self.path, str):
             _check_names(f"path_kwargs of path {self.path!r}", self.path_kwargs,
                          _path_parameters(self.path))
-            _check_path_values(self.path, self.path_kwargs)
         if not isinstance(self.estimator, str):
             raise ValueError(f"estimator must be an estimator name, got {self.estimator!r}")
         _check_options("estimator_kwargs", self.estimator_kwargs)
@@ -181,10 +193,14 @@ class SlipEnvConfig:
         object.__setattr__(self, "beacons", _beacons(self.beacons))
         for name in ("control_hz", "physics_hz", "max_episode_s", "max_cross_track_m"):
             value = getattr(self, name)
+            if name == "max_cross_track_m" and value is None:
+                continue
             if not (_is_number(value) and math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+                raise ValueError(f"{name} must be a finite number > 0, got {value!r}"
+                                 + (" (or None: a corridor that fits the path)"
+                                    if name == "max_cross_track_m" else ""))
         for name, high in LIMITS.items():
-            if getattr(self, name) > high:
+            if getattr(self, name) is not None and getattr(self, name) > high:
                 raise ValueError(f"{name} must be <= {high:g}, got {getattr(self, name)!r}"
                                  + (f" ({LIMIT_REASONS[name]})" if name in LIMIT_REASONS else ""))
         ratio = self.physics_hz / self.control_hz
@@ -198,13 +214,26 @@ class SlipEnvConfig:
             raise ValueError("start_jitter must be (position_m, yaw_deg) with 0 <= position_m "
                              f"<= 1 and 0 <= yaw_deg <= 30, got {jitter!r}")
         object.__setattr__(self, "start_jitter", (float(jitter[0]), float(jitter[1])))
+        check_path_fits(self.path if isinstance(self.path, Path)
+                        else make_path(self.path, self.path_kwargs),
+                        self.vehicle, self.max_cross_track_m, self.start_jitter[0],
+                        "path_kwargs" if isinstance(self.path, str) else "path")
         if not isinstance(self.camera_in_info, bool):
             raise ValueError(f"camera_in_info must be True or False, got {self.camera_in_info!r}")
         _check_options("reward_weights", self.reward_weights)
         _check_names("reward_weights", self.reward_weights, REWARD_TERMS, what="reward term")
         for key, value in self.reward_weights.items():
-            if not (_is_number(value) and math.isfinite(value)):
-                raise ValueError(f"reward_weights[{key!r}] must be a finite number, got {value!r}")
+            if not (_is_number(value) and math.isfinite(value) and value >= 0):
+                raise ValueError(
+                    f"reward_weights[{key!r}] must be a finite number >= 0, got {value!r} "
+                    "(each term carries its own sign: cross_track, heading and effort are "
+                    "penalties <= 0, progress is >= 0; a negative weight would reward what "
+                    "the term penalises)")
+
+    def corridor_m(self, path: Path) -> float:
+        """The corridor half-width [m] the env judges ``path`` by: ``max_cross_track_m``, or
+        when it is None the corridor that fits the path (:func:`corridor_for`)."""
+        return corridor_for(path) if self.max_cross_track_m is None else self.max_cross_track_m
 
     @classmethod
     def from_kwargs(cls, base: SlipEnvConfig | None = None, **kwargs: Any) -> SlipEnvConfig:
@@ -378,10 +407,68 @@ def _beacons(value: Beacons) -> Beacons:
     return tuple((float(x), float(y)) for x, y in xy)
 
 
-def _check_path_values(name: str, kwargs: dict[str, Any]) -> None:
-    """Build the path once (well under a millisecond), so that a bad value (a negative
-    speed) is an error of the config, not of the first ``make``."""
-    make_path(name, kwargs)
+CORRIDOR_RADIUS_FRACTION = 0.4
+"""Default corridor half-width as a fraction of the path's smallest turning radius: below one
+radius, so that a vehicle at the centre of a turn (spinning in place there, or spiralled in)
+is outside the corridor, with a margin; and every point of the corridor then lies nearer to
+one branch of the turn than to the opposite one."""
+CORRIDOR_CAP_M = 2.0
+"""Default corridor half-width [m] on paths whose turns are wide or absent (a straight)."""
+# The observation's ranges (slipenv.contracts.observation) that a path's values reach: the
+# position (indices 0, 1), the yaw rate (5), the path curvature (9) and reference speed (10).
+OBS_POSITION_M = float(OBS_HIGH[OBS_X])
+OBS_YAW_RATE_RPS = float(OBS_HIGH[OBS_YAW_RATE])
+OBS_CURVATURE_1PM = float(OBS_HIGH[OBS_CURVATURE])
+OBS_REF_SPEED_MPS = float(OBS_HIGH[OBS_REF_SPEED])
+
+
+def corridor_for(path: Path) -> float:
+    """Corridor half-width [m] that fits ``path``: ``CORRIDOR_RADIUS_FRACTION`` (0.4) of its
+    smallest turning radius, at most ``CORRIDOR_CAP_M`` (2 m). Yamauchi's r = 0.25 m circle
+    gets 0.1 m; a straight, 2 m."""
+    return min(CORRIDOR_CAP_M, CORRIDOR_RADIUS_FRACTION * path.min_turning_radius_m)
+
+
+def check_path_fits(path: Path, vehicle: str | VehicleSpec, max_cross_track_m: float | None,
+                    jitter_m: float, option: str = "path_kwargs") -> None:
+    """Refuse a path whose values the observation would clip.
+
+    Bounds (each error names ``option`` and states the bound):
+
+    * position: every point of the path, widened by the corridor and the start jitter (as
+      far as the true vehicle can be before the episode ends), within the observation's
+      ±1e4 m, so the policy never sees a clipped position;
+    * reference speed at most 50 m/s and the yaw rate it demands (speed x curvature) at most
+      20 rad/s, the observation's ranges (the presets' vehicles top out at 0.3-1.2 m/s and
+      0.6-1.5 rad/s, so these bounds only refuse values no vehicle here could approach);
+    * turning radius at least 1 mm (curvature within the observation's 1e3 1/m).
+    """
+    spec = VEHICLES[vehicle]() if isinstance(vehicle, str) else vehicle
+    about = (f"vehicle {spec.name!r} tops out at {spec.max_speed_mps:g} m/s and "
+             f"{spec.max_yaw_rate_rad_s:g} rad/s")
+    x0, y0, x1, y1 = path.extent()
+    corridor = corridor_for(path) if max_cross_track_m is None else max_cross_track_m
+    reach = max(abs(x0), abs(y0), abs(x1), abs(y1)) + corridor + jitter_m
+    if not reach <= OBS_POSITION_M:
+        raise ValueError(
+            f"{option}: path {path.name!r} reaches {reach:.3g} m from the origin (its extent "
+            f"x in [{x0:.3g}, {x1:.3g}], y in [{y0:.3g}, {y1:.3g}] m, plus the {corridor:.3g} "
+            f"m corridor and the start jitter), beyond the observation's position range of "
+            f"±{OBS_POSITION_M:g} m; use a smaller path (radius_m, length_m, loops, ...)")
+    if not path.max_speed_mps <= OBS_REF_SPEED_MPS:
+        raise ValueError(
+            f"{option}: speed_mps reaches {path.max_speed_mps:g} m/s, beyond the "
+            f"observation's reference-speed range of {OBS_REF_SPEED_MPS:g} m/s ({about})")
+    if not path.max_curvature_1pm <= OBS_CURVATURE_1PM:
+        raise ValueError(
+            f"{option}: path {path.name!r} turns on a radius of "
+            f"{path.min_turning_radius_m:.3g} m, below 1 mm (curvature beyond the "
+            f"observation's range of {OBS_CURVATURE_1PM:g} 1/m)")
+    if not path.max_yaw_rate_rps <= OBS_YAW_RATE_RPS:
+        raise ValueError(
+            f"{option}: path {path.name!r} asks for a yaw rate of {path.max_yaw_rate_rps:.3g} "
+            f"rad/s (speed_mps x curvature on a radius of {path.min_turning_radius_m:.3g} m), "
+            f"beyond the observation's yaw-rate range of {OBS_YAW_RATE_RPS:g} rad/s ({about})")
 
 
 def _path_parameters(name: str) -> list[str]:

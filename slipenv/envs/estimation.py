@@ -118,7 +118,7 @@ def _lindgren_oracle(spec: VehicleSpec, context: dict, **kw: Any) -> Estimator:
     return _lindgren(spec, context, scheme=4, oracle=truth(), **kw)
 
 
-SLIP_MODEL_KEYS = ("s_x0", "k_per_rad", "beta0_rad")
+SLIP_MODEL_KEYS = ("s_x0", "k_per_rad", "beta0_rad", "k_pitch", "pitch_ref_rad")
 
 
 def _slip_ratio_model(value: Any):

@@ -126,7 +126,8 @@ class SlipEnv(gym.Env):
     different seeds give different episodes and one seed gives the same one bit for bit.
 
     Episode end: terminated when the true progress reaches the path end or the true
-    cross-track error exceeds ``max_cross_track_m``; truncated at ``max_episode_s`` or on a
+    cross-track error exceeds the corridor (``max_cross_track_m``; by default 0.4 of the
+    path's smallest turning radius, at most 2 m); truncated at ``max_episode_s`` or on a
     physics blow-up (``info["truncation_reason"]``).
 
     Rear trace camera (Reina §2): with ``estimator="scomp"`` the env mounts a 5 Hz camera
@@ -181,6 +182,7 @@ class SlipEnv(gym.Env):
             castor_own_geometry=cfg.castor_own_geometry,
         )
         self._dt_s = self._sim.control_dt_s
+        self._corridor_m = cfg.corridor_m(self._path)
         self.max_steps = episode_steps(cfg.max_episode_s, cfg.control_hz)
         self._sensors = SensorSuite(self._vehicle.counts_per_rad, noise, beacons=beacons)
         self.observation_space = spaces.Box(OBS_LOW, OBS_HIGH, dtype=np.float32)
@@ -207,6 +209,13 @@ class SlipEnv(gym.Env):
     def path(self) -> Path:
         """The reference path of the task."""
         return self._path
+
+    @property
+    def max_cross_track_m(self) -> float:
+        """Half-width of the corridor [m] success is judged in: the config's
+        ``max_cross_track_m``, or the corridor that fits the path
+        (:func:`slipenv.envs.config.corridor_for`)."""
+        return self._corridor_m
 
     @property
     def control_dt_s(self) -> float:
@@ -275,6 +284,7 @@ class SlipEnv(gym.Env):
 
     # -- gymnasium API ---------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        self._check_open("reset")
         super().reset(seed=seed)
         x0, y0, yaw0 = self._jittered_start()
         truth = self._sim.reset(x0, y0, yaw0)
@@ -295,6 +305,7 @@ class SlipEnv(gym.Env):
         return obs, self._info(truth, estimate, frame, {})
 
     def step(self, action):
+        self._check_open("step")
         a0, a1 = _checked_action(action)
         if self.estimator is None:
             raise RuntimeError("call reset() before step()")
@@ -334,7 +345,7 @@ class SlipEnv(gym.Env):
         reward = float(sum(weights.get(k, 0.0) * v for k, v in terms.items()))
         self._last_action = (a0, a1)
         done_path = self._s_true >= self._path.length_m - 1e-3
-        lost = abs(proj.cross_track_m) > self.config.max_cross_track_m
+        lost = abs(proj.cross_track_m) > self._corridor_m
         truncated = self._steps >= self.max_steps and not (done_path or lost)
         extra = {
             "reward_terms": terms,
@@ -378,6 +389,12 @@ class SlipEnv(gym.Env):
         sim = getattr(self, "_sim", None)  # absent if construction failed before it
         if sim is not None:
             sim.close()
+        self._closed = True
+
+    def _check_open(self, call: str) -> None:
+        # Without this, the disconnected PyBullet client surfaces as a TypeError about None.
+        if getattr(self, "_closed", False):
+            raise RuntimeError(f"env is closed: {call}() after close(); make a new env")
 
     # -- helpers ---------------------------------------------------------------------------
     def _estimator_context(self) -> dict:

@@ -230,10 +230,12 @@ def evaluate(policy: Any, env_id: str, seeds: Iterable[int], env_kwargs: dict | 
         from tqdm.auto import tqdm
 
         bar = tqdm(desc=f"{source.label} on {env_id}", unit="step", leave=False)
-    results = [run_episode(source, env_id, s, env_kwargs, max_steps, rpe_delta_steps, bar)
-               for s in seeds]
-    if bar is not None:
-        bar.close()
+    try:
+        results = [run_episode(source, env_id, s, env_kwargs, max_steps, rpe_delta_steps, bar)
+                   for s in seeds]
+    finally:  # on Ctrl-C too: the bar's remains must not print after the CLI's one line
+        if bar is not None:
+            bar.close()
     return Evaluation(policy=source.label, env_id=env_id, seeds=seeds, env_kwargs=env_kwargs,
                       per_episode=tuple(r[0] for r in results),
                       traces=tuple(r[1] for r in results), rpe_delta_steps=rpe_delta_steps)

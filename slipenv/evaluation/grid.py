@@ -6,7 +6,7 @@ Grid file (YAML)::
     policies: [baseline, feedback, runs/ppo/model.zip]                # required
     seeds: [0, 1, 2]              # required: a list, or {start: 0, count: 3}
     soils: [toyoura_sand, loose_sand]   # optional axis: env kwarg ``soil``
-    slopes_deg: [5, 15]           # optional axis: the preset's terrain tilted to this slope
+    slopes_deg: [5, 15]           # optional axis: the preset's ground tilted to this slope
     variations:                   # optional axis: named env-kwarg sets
       short: {max_episode_s: 20}
     env_kwargs: {}                # optional: applied to every cell (before the axes)
@@ -153,10 +153,12 @@ def _cell_kwargs(path: str | Path, env_id: str, common: dict, variation: dict,
         cfg = SlipEnvConfig.from_kwargs(preset_config(env_id), **kwargs)
         if slope is not None:
             assert isinstance(cfg.terrain, TerrainSpec)  # SlipEnvConfig keeps a spec
-            if cfg.terrain.kind == "mounds":
-                raise ValueError("slopes_deg tilts flat or slope terrain, not mounds")
-            terrain = {**dataclasses.asdict(cfg.terrain), "kind": "slope",
-                       "slope_deg": float(slope)}
+            # Mounds stay mounds, on a tilted plane; flat ground becomes a slope. Empty
+            # placed mounds are left out so that cells keep the keys they had before them.
+            spec = {k: v for k, v in dataclasses.asdict(cfg.terrain).items()
+                    if k != "placed_mounds" or v}
+            kind = "mounds" if cfg.terrain.kind == "mounds" else "slope"
+            terrain = {**spec, "kind": kind, "slope_deg": float(slope)}
             kwargs["terrain"] = terrain
             SlipEnvConfig.from_kwargs(cfg, terrain=terrain)
     except (ValueError, TypeError) as exc:

@@ -16,6 +16,12 @@ name               policy
 PATH               a stable-baselines3 ``.zip``; the algorithm is read from a ``config.json``
                    next to it (key ``algo``) or detected from the saved file itself
 =================  ========================================================================
+
+A model trained on the residual wrapper (``slipenv.agents.residual``) acts through it: its
+action is a correction to the base controller's. Its ``.zip`` records the composition (the
+saved action space is a ``ResidualBox``), so the file alone, or the loaded SB3 object, is
+scored the same as its run folder; for models saved before the file recorded it, the run's
+``config.json`` still tells.
 """
 
 from __future__ import annotations
@@ -80,12 +86,25 @@ class PolicySource:
         return ResidualActionWrapper(env, **self.residual)
 
     def build(self, env: gym.Env) -> Any:
-        """A predictor (SB3 ``predict``) for ``env`` (as returned by :meth:`wrap_env`)."""
-        if self.kind == "object":
-            return self._obj
+        """A predictor (SB3 ``predict``) for ``env`` (as returned by :meth:`wrap_env`).
+
+        Raises
+        ------
+        ValueError
+            If the model was made for other observation or action shapes than ``env``'s.
+        """
         if self.kind == "builtin":
             return baseline_controller(env, BUILTIN_POLICIES[self.label])
-        return _load_model(self.algo or "", self.model_path or "")
+        model = (self._obj if self.kind == "object"
+                 else _load_model(self.algo or "", self.model_path or ""))
+        for name in ("observation_space", "action_space"):
+            mine, envs = getattr(model, name, None), getattr(env, name, None)
+            if (isinstance(mine, gym.spaces.Box) and isinstance(envs, gym.spaces.Box)
+                    and mine.shape != envs.shape):
+                raise ValueError(f"policy {self.label}: made for an {name} of shape "
+                                 f"{mine.shape}, but {env.spec.id if env.spec else 'the env'} "
+                                 f"has {envs.shape}: it was trained on another env")
+        return model
 
 
 def _load_model(algo: str, path: str) -> Any:
@@ -145,6 +164,35 @@ def _model_config(path: Path) -> dict:
     return {}
 
 
+def saved_composition(path: str | Path) -> dict | None:
+    """The residual composition recorded in an SB3 ``.zip`` (its saved action space), or None.
+
+    Read from the archive's JSON (``data``), without unpickling or loading the weights.
+
+    Raises
+    ------
+    ValueError
+        If the archive says its model is residual but does not say on which controller.
+    """
+    from slipenv.agents.residual import ResidualBox
+
+    try:
+        with zipfile.ZipFile(path) as zf:
+            space = json.loads(zf.read("data")).get("action_space", {})
+    except (zipfile.BadZipFile, KeyError, json.JSONDecodeError, OSError):
+        return None
+    if not isinstance(space, dict) or ResidualBox.__name__ not in str(space.get(":type:", "")):
+        return None
+    controller, scale = space.get("residual_controller"), space.get("residual_scale")
+    kwargs = space.get("residual_controller_kwargs", {})
+    if not isinstance(controller, str) or not isinstance(scale, int | float) \
+            or not isinstance(kwargs, dict):
+        raise ValueError(f"--policy: {str(path)!r} holds a residual agent but not its "
+                         "composition (base controller, scale): it cannot be scored "
+                         "without them")
+    return {**kwargs, "controller": controller, "scale": float(scale)}
+
+
 def _residual_options(config: dict) -> dict | None:
     """Residual-wrapper options from a training config (keys ``residual``, ``residual_scale``
     and ``controller``, as written by ``slipenv train``), or None for a plain agent."""
@@ -186,13 +234,18 @@ def resolve_policy(policy: Any) -> PolicySource:
             raise ValueError(f"--policy: unknown policy {name!r}; use one of "
                              f"{', '.join(BUILTIN_POLICIES)} or a path to an SB3 .zip")
         algo = detect_algo(name)
-        config = _model_config(Path(name))
+        residual = saved_composition(name)
+        if residual is None:  # a model saved before the zip recorded it: its run's config
+            residual = _residual_options(_model_config(Path(name)))
         resolved = str(Path(name).resolve())
         return PolicySource(label=name, kind="model", key=f"model:{resolved}",
-                            model_path=resolved, algo=algo, residual=_residual_options(config))
+                            model_path=resolved, algo=algo, residual=residual)
     if hasattr(policy, "predict") or callable(policy):
+        from slipenv.agents.residual import residual_composition
+
         return PolicySource(label=type(policy).__name__, kind="object",
-                            key=f"object:{type(policy).__qualname__}:{id(policy)}", _obj=policy)
+                            key=f"object:{type(policy).__qualname__}:{id(policy)}", _obj=policy,
+                            residual=residual_composition(policy))
     raise ValueError(f"policy must be a name, a model path or an object with predict(), "
                      f"got {policy!r}")
 

@@ -9,6 +9,10 @@ Fixture ``slipenv_eval`` — a function ``(policy, env_id, seeds=(0, 1, 2), *, m
         ev.assert_below("cross_track_rmse_m", 0.05)   # failure names the worst seed
         ev.assert_above("success_rate", 0.99)
 
+The policy is anything ``slipenv evaluate --policy`` takes -- a built-in name, a model path,
+an object with SB3's ``predict`` -- and an SB3 model trained on the residual wrapper (a path or
+``PPO.load(...)``) acts through its base controller as its ``.zip`` records.
+
 Episodes are cached per (policy identity, env id, env kwargs, seed, max_steps) for the whole
 test session, so a module asserting several metrics, or several tests sharing seeds, run each
 episode once. The policy's identity is its name or model path, or the object itself (an

@@ -17,8 +17,11 @@ from __future__ import annotations
 import csv
 import json
 import os
+import signal
 import sys
-from collections.abc import Callable, Sequence
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -86,13 +89,53 @@ def run_local(todo: list[dict], out_dir: str, workers: int, quiet: bool) -> None
 
         warm_up()  # compiled here once, not by every worker at the same time on a cold cache
         ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-            futures = [pool.submit(run_cell, cell, out_dir) for cell in todo]
-            for fut in as_completed(futures):
-                fut.result()  # re-raise a cell's error here
-                bar.update(1)
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                                 initializer=_leave_ctrl_c_to_the_parent) as pool:
+            with _workers_ignore_ctrl_c():  # the workers start during the submissions
+                futures = [pool.submit(run_cell, cell, out_dir) for cell in todo]
+            try:
+                for fut in as_completed(futures):
+                    fut.result()  # re-raise a cell's error here
+                    bar.update(1)
+            except KeyboardInterrupt:
+                _stop_now(pool)
+                raise
     finally:
         bar.close()
+
+
+def _leave_ctrl_c_to_the_parent() -> None:
+    """Pool initializer. Ctrl-C reaches every process of the terminal's group: workers ignore
+    it (no traceback per worker) and the parent stops them (:func:`_stop_now`)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@contextmanager
+def _workers_ignore_ctrl_c() -> Iterator[None]:
+    """Processes started inside the block ignore Ctrl-C from their first instruction (an
+    ignored signal stays ignored across ``exec``), not only once the initializer has run
+    after their imports. Only the main thread may change signal handlers; elsewhere the
+    initializer alone does it."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _stop_now(pool) -> None:
+    """Drop the queued cells and end the running ones. A cell's result file appears by an
+    atomic rename, so an ended cell leaves no result file (at most a ``.tmp`` one) and runs
+    again on resume."""
+    # The executor has no public way to end running tasks; its worker table (stable since
+    # Python 3.3) is emptied by shutdown(), so it is read first.
+    workers = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in workers:
+        process.terminate()
 
 
 class RayUnavailable(RuntimeError):
@@ -126,10 +169,15 @@ def run_ray(todo: list[dict], out_dir: str, workers: int, quiet: bool,
     bar = _progress(len(todo), quiet)
     try:
         pending = [remote.remote(cell, str(Path(out_dir).resolve())) for cell in todo]
-        while pending:
-            done, pending = ray.wait(pending, num_returns=1)
-            ray.get(done)
-            bar.update(len(done))
+        try:
+            while pending:
+                done, pending = ray.wait(pending, num_returns=1)
+                ray.get(done)
+                bar.update(len(done))
+        except KeyboardInterrupt:
+            for ref in pending:  # a cluster would otherwise run the rest of the grid
+                ray.cancel(ref, force=True)
+            raise
     finally:
         bar.close()
         if started:

@@ -5,7 +5,8 @@ A log is a folder with ``meta.json`` (vehicle, terrain, notes, any extra keys) a
 ground-truth pose). ``read_log``/``write_log`` validate against the contract and raise
 ``LogFormatError`` naming the file, row and column; ``Log.from_arrays`` builds a log from a
 simulated episode with the same checks. ``slipenv.logs.rosbag`` imports ROS 1/2 bags and
-``slipenv.logs.real`` converts the real datasets (OptiOdom, BorealTC).
+``slipenv.logs.real`` converts the real datasets (OptiOdom, BorealTC); a run of each and one
+generated log ship in the package (``slipenv.logs.examples.path(name)``).
 """
 
 from slipenv.logs.errors import LogFormatError

@@ -6,8 +6,11 @@ Classification for Boreal Forests", IROS 2024, arXiv:2403.16877. Dataset license
 the attribution travels in each log's ``meta.json``.
 
 Per run ``<TERRAIN>/pro_XX.csv`` (``time`` [s], ``curL, curR`` [A], ``velL, velR`` [m/s], about
-6.5 Hz; the MIXED run adds a per-sample ``terrain`` label) and ``<TERRAIN>/imu_XX.csv.gz``
+6.5 Hz; the MIXED run adds a per-sample ``terrain`` label) and ``<TERRAIN>/imu_XX.csv``
 (``time`` [s], ``wx, wy, wz`` [rad/s], ``ax, ay, az`` [m/s^2], 100 Hz), some IMU files missing.
+Both are read as the source repository lays them out (plain CSV) or gzip-compressed
+(``.csv.gz``); a run without an IMU file, or an IMU file without a needed column, is
+converted without those columns and a ``UserWarning`` names the file.
 
 Conversion, and what is assumed:
 
@@ -34,11 +37,14 @@ from __future__ import annotations
 import csv
 import gzip
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TextIO
 
 import numpy as np
 
+from slipenv.logs.errors import LogFormatError
 from slipenv.logs.log import Log
 from slipenv.logs.meta import LogMeta
 
@@ -72,17 +78,50 @@ class BorealRun:
         return f"{self.terrain}_{self.index:02d}"
 
 
+IMU_COLUMNS = {"gyro_z": "wz", "acc_x": "ax", "acc_y": "ay"}
+"""Log column -> IMU file column it is averaged from."""
+
+
 def list_borealtc_runs(root: str | Path) -> list[BorealRun]:
-    """All runs under ``root`` (the ``borealtc-husky`` folder), sorted by terrain and index."""
-    runs = []
-    for pro in sorted(Path(root).glob("*/pro_*.csv")):
-        match = re.fullmatch(r"pro_(\d+)\.csv", pro.name)
+    """All runs under ``root`` (the dataset folder), sorted by terrain and index.
+
+    ``pro_XX`` and ``imu_XX`` files are found plain (``.csv``, the source repository's layout)
+    or gzip-compressed (``.csv.gz``); the plain file wins when both are there.
+    """
+    found: dict[tuple[str, int], tuple[Path, str]] = {}
+    for pro in sorted(Path(root).glob("*/pro_*.csv*")):
+        match = re.fullmatch(r"pro_(\d+)\.csv(\.gz)?", pro.name)
         if match is None:
             continue
-        imu = pro.with_name(f"imu_{match[1]}.csv.gz")
-        runs.append(BorealRun(pro.parent.name, int(match[1]), pro,
-                              imu if imu.is_file() else None))
+        key = (pro.parent.name, int(match[1]))
+        if key not in found or not match[2]:
+            found[key] = pro, match[1]
+    runs = []
+    for (terrain, index), (pro, number) in sorted(found.items()):
+        imu = next((p for p in (pro.with_name(f"imu_{number}.csv"),
+                                pro.with_name(f"imu_{number}.csv.gz")) if p.is_file()), None)
+        runs.append(BorealRun(terrain, index, pro, imu))
     return runs
+
+
+def _open_text(path: Path) -> TextIO:
+    """A plain or gzip-compressed CSV file as text (a byte-order mark skipped)."""
+    if path.suffix == ".gz":
+        return gzip.open(path, "rt", encoding="utf-8-sig", newline="")
+    return path.open(encoding="utf-8-sig", newline="")
+
+
+def read_imu(path: Path) -> dict[str, np.ndarray]:
+    """The columns of an ``imu_XX.csv[.gz]`` file by header name (``time``, ``wz``, ...)."""
+    with _open_text(path) as fh:
+        header = [h.strip() for h in fh.readline().split(",")]
+        try:
+            table = np.loadtxt(fh, delimiter=",", ndmin=2)
+        except ValueError as exc:
+            raise LogFormatError(path, f"unreadable IMU table ({exc})") from None
+    if table.shape[1] != len(header):
+        raise LogFormatError(path, f"{table.shape[1]} columns but {len(header)} header names")
+    return {name: table[:, k] for k, name in enumerate(header)}
 
 
 def load_borealtc_run(run: BorealRun, *, align_imu: bool = True) -> Log:
@@ -107,18 +146,21 @@ def load_borealtc_run(run: BorealRun, *, align_imu: bool = True) -> Log:
         omega = pro[f"vel{key}"] / WHEEL_RADIUS_M  # [rad/s]
         angle = np.concatenate([[0.0], np.cumsum(0.5 * (omega[1:] + omega[:-1]) * np.diff(t))])
         cols[f"enc_{side}"] = np.round(angle * COUNTS_PER_RAD)
-    cols["current_left"], cols["current_right"] = pro["curL"], pro["curR"]
+    if "curL" in pro:
+        cols["current_left"], cols["current_right"] = pro["curL"], pro["curR"]
     borealtc: dict[str, object] = {"terrain": run.terrain, "run": run.index,
                                    "pro_file": f"{run.terrain}/{run.pro_path.name}",
                                    "imu_file": None}
-    if run.imu_path is not None:
-        imu = np.loadtxt(gzip.open(run.imu_path, "rt"), delimiter=",", skiprows=1, ndmin=2)
-        ts = imu[:, 0]
-        yaw_rate_wheels = (pro["velR"] - pro["velL"]) / TRACK_WIDTH_M
-        lag, corr0, corr = estimate_imu_lag(ts, imu[:, 3], t, yaw_rate_wheels) if align_imu \
-            else (0.0, float("nan"), float("nan"))
-        for name, k in (("gyro_z", 3), ("acc_x", 4), ("acc_y", 5)):
-            cols[name] = window_mean(ts, imu[:, k], t + lag)
+    imu = _imu_streams(run)
+    if imu and run.imu_path is not None:
+        ts = imu["time"]
+        lag, corr0, corr = 0.0, float("nan"), float("nan")
+        if align_imu and "wz" in imu:
+            yaw_rate_wheels = (pro["velR"] - pro["velL"]) / TRACK_WIDTH_M
+            lag, corr0, corr = estimate_imu_lag(ts, imu["wz"], t, yaw_rate_wheels)
+        for name, source in IMU_COLUMNS.items():
+            if source in imu:
+                cols[name] = window_mean(ts, imu[source], t + lag)
         borealtc.update(imu_file=f"{run.terrain}/{run.imu_path.name}", imu_time_shift_s=lag,
                         imu_yaw_rate_corr_unshifted=corr0, imu_yaw_rate_corr_shifted=corr)
     if labels:
@@ -140,6 +182,25 @@ def load_borealtc_run(run: BorealRun, *, align_imu: bool = True) -> Log:
         borealtc={k: _json_float(v) for k, v in borealtc.items()},
     )
     return Log.from_arrays(meta, require_ground_truth=False, **cols)
+
+
+def _imu_streams(run: BorealRun) -> dict[str, np.ndarray]:
+    """The run's IMU columns; empty, with a warning naming the file, when it has none."""
+    if run.imu_path is None:
+        folder = run.pro_path.parent
+        warnings.warn(f"BorealTC run {run.name}: no IMU file ({folder / f'imu_{run.index:02d}'}"
+                      ".csv or .csv.gz); the log has no gyro_z, acc_x, acc_y", stacklevel=3)
+        return {}
+    imu = read_imu(run.imu_path)
+    if "time" not in imu:
+        warnings.warn(f"BorealTC run {run.name}: {run.imu_path} has no 'time' column; the log "
+                      "has no gyro_z, acc_x, acc_y", stacklevel=3)
+        return {}
+    missing = [f"{name} (from '{src}')" for name, src in IMU_COLUMNS.items() if src not in imu]
+    if missing:
+        warnings.warn(f"BorealTC run {run.name}: {run.imu_path} lacks the columns of "
+                      f"{', '.join(missing)}; the log has none of them", stacklevel=3)
+    return imu
 
 
 def window_mean(ts: np.ndarray, y: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -210,10 +271,26 @@ def estimate_imu_lag(ts: np.ndarray, gyro_z: np.ndarray, t: np.ndarray,
 
 def _read_pro(path: Path) -> tuple[dict[str, np.ndarray], list[list[object]]]:
     """Numeric columns of a ``pro_XX.csv`` and, if present, terrain label intervals."""
-    with path.open(encoding="utf-8-sig", newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    cols = {k: np.array([float(r[k]) for r in rows]) for k in ("time", "curL", "curR",
-                                                             "velL", "velR")}
+    with _open_text(path) as fh:
+        reader = csv.DictReader(fh)
+        rows = list(reader)
+        names = [n.strip() for n in reader.fieldnames or []]
+    missing = [k for k in ("time", "velL", "velR") if k not in names]
+    if missing:
+        raise LogFormatError(path, f"no {', '.join(map(repr, missing))} column (BorealTC "
+                             "pro_XX files hold time, curL, curR, velL, velR)")
+    keys = ["time", "velL", "velR"]
+    absent = [k for k in ("curL", "curR") if k not in names]
+    if absent:
+        warnings.warn(f"{path}: no {' or '.join(absent)} column; the log has no motor "
+                      "currents", stacklevel=3)
+    else:
+        keys += ["curL", "curR"]
+    try:
+        cols = {k: np.array([float(r[k]) for r in rows]) for k in keys}
+    except (TypeError, ValueError):
+        line = next(i for i, r in enumerate(rows, 2) if not _numeric(r, keys))
+        raise LogFormatError(path, "missing or non-numeric value", line=line) from None
     labels: list[list[object]] = []
     if rows and "terrain" in rows[0]:
         for r, t in zip(rows, cols["time"], strict=True):
@@ -223,6 +300,14 @@ def _read_pro(path: Path) -> tuple[dict[str, np.ndarray], list[list[object]]]:
             else:
                 labels.append([float(t), float(t), label])
     return cols, labels
+
+
+def _numeric(row: dict[str, str], keys: list[str]) -> bool:
+    try:
+        [float(row[k]) for k in keys]
+    except (TypeError, ValueError):
+        return False
+    return True
 
 
 def _json_float(value: object) -> object:

@@ -43,9 +43,11 @@ def meta_for(spec: VehicleSpec, terrain: TerrainSpec | None = None, soil: str = 
              counts_per_rad: float | None = None, notes: str = "", **extra: Any) -> LogMeta:
     """``meta.json`` for a simulated vehicle: wheels = drive channels, nominal geometry."""
     terrain = terrain or TerrainSpec()
-    slope = terrain.slope_deg if terrain.kind == "slope" else 0.0
+    slope = terrain.plane_slope_deg
+    n_mounds = terrain.mound_count + len(terrain.placed_mounds)
     description = {"flat": "flat plane", "slope": f"planar slope {slope:g}°",
-                   "mounds": f"{terrain.mound_count} Gaussian mounds"}[terrain.kind]
+                   "mounds": f"{n_mounds} Gaussian mounds"
+                             + (f" on a {slope:g}° slope" if slope else "")}[terrain.kind]
     return LogMeta.new(
         spec.kind, list(spec.channels), wheel_radius_m=spec.wheel_radius_nominal_m,
         track_width_m=spec.track_width_m,

@@ -9,7 +9,9 @@ Layout: ``<root>/<path type>/<session>/<session>_run-NN.csv`` (no header, 20 Hz:
 ground-truth x, y [m] and heading [rad] relative to the start pose, then tick increments of
 the *right* wheel (column 5) and the *left* wheel (column 6)) beside
 ``<session>_metadata.csv`` (``ngear``, ``encRes``, ``Li`` [m], ``Di`` [m] right then left, and
-the synchronisation windows). Some files may start with a UTF-8 byte-order mark.
+the synchronisation windows). Some files may start with a UTF-8 byte-order mark. Every file is
+read plain (``.csv``, the source repository's layout) or gzip-compressed (``.csv.gz``); a run
+whose session has no metadata file is skipped with a ``UserWarning`` naming the file.
 
 The metadata ``Li``/``Di`` are the parameters the robot's own odometry used in that session;
 they differ between sessions (Li 0.2 or 0.205 m, Di 0.084 or 0.085 m) and are the nominal
@@ -18,8 +20,10 @@ values here. The ground-truth heading is continuous (unwrapped), as in the sourc
 
 from __future__ import annotations
 
+import gzip
 import math
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,7 +43,7 @@ SOURCE = {
              "J. Intell. Robot. Syst., 2022",
     "license": "MIT, (c) 2021 the authors",
 }
-_RUN_FILE = re.compile(r"^(?P<session>\d+)_run-(?P<run>\d+)\.csv$")
+_RUN_FILE = re.compile(r"^(?P<session>\d+)_run-(?P<run>\d+)\.csv(?P<gz>\.gz)?$")
 
 
 @dataclass(frozen=True)
@@ -72,23 +76,51 @@ class OptiOdomRun:
 
 
 def list_optiodom_runs(root: str | Path) -> list[OptiOdomRun]:
-    """All runs under ``root`` (the ``optiodom-diffdrive`` folder), sorted by name."""
+    """All runs under ``root`` (the dataset folder), sorted by name.
+
+    Files are found plain or gzip-compressed (the plain one wins when both are there). A run
+    whose session has no ``<session>_metadata.csv[.gz]`` is left out with a warning: its
+    wheel geometry and encoder resolution are in that file.
+    """
     runs = []
     for path_type in PATH_TYPES:
-        for csv_path in sorted(Path(root, path_type).glob("*/*_run-*.csv")):
+        found: dict[tuple[str, int], Path] = {}
+        for csv_path in sorted(Path(root, path_type).glob("*/*_run-*.csv*")):
             match = _RUN_FILE.match(csv_path.name)
             if match is None:
                 continue
-            session = match["session"]
-            runs.append(OptiOdomRun(csv_path, csv_path.parent / f"{session}_metadata.csv",
-                                    path_type, session, int(match["run"])))
+            key = (match["session"], int(match["run"]))
+            if key not in found or not match["gz"]:
+                found[key] = csv_path
+        for (session, run), csv_path in sorted(found.items()):
+            metadata = _plain_or_gz(csv_path.parent / f"{session}_metadata.csv")
+            if metadata is None:
+                warnings.warn(f"OptiOdom run {csv_path}: no {session}_metadata.csv(.gz) beside "
+                              "it (wheel diameters, wheelbase, encoder resolution); run skipped",
+                              stacklevel=2)
+                continue
+            runs.append(OptiOdomRun(csv_path, metadata, path_type, session, run))
     return runs
+
+
+def _plain_or_gz(path: Path) -> Path | None:
+    """``path`` if it is a file, else ``path.gz`` if that is, else None."""
+    for candidate in (path, path.with_name(path.name + ".gz")):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def _read_text(path: Path) -> str:
+    """A plain or gzip-compressed file's text (a UTF-8 byte-order mark dropped)."""
+    raw = gzip.decompress(path.read_bytes()) if path.suffix == ".gz" else path.read_bytes()
+    return raw.decode("utf-8-sig")
 
 
 def read_optiodom_metadata(path: str | Path) -> dict[str, list[float]]:
     """Parse ``<session>_metadata.csv`` into key -> numeric values (empty cells dropped)."""
     out: dict[str, list[float]] = {}
-    for line in Path(path).read_text(encoding="utf-8-sig").splitlines():
+    for line in _read_text(Path(path)).splitlines():
         cells = [c.strip() for c in line.split(",")]
         if not cells[0]:
             continue
@@ -104,7 +136,7 @@ def read_optiodom_metadata(path: str | Path) -> dict[str, list[float]]:
 
 def _read_run_table(path: Path) -> np.ndarray:
     rows = []
-    for line_no, line in enumerate(path.read_text(encoding="utf-8-sig").splitlines(), 1):
+    for line_no, line in enumerate(_read_text(path).splitlines(), 1):
         if not line.strip():
             continue
         cells = line.split(",")
@@ -130,6 +162,10 @@ def load_optiodom_run(run: OptiOdomRun) -> Log:
         Columns ``t, enc_left, enc_right, gt_x, gt_y, gt_yaw``.
     """
     md = read_optiodom_metadata(run.metadata_path)
+    for key, count in (("ngear", 1), ("encRes", 1), ("Li", 1), ("Di", 2)):
+        if len(md.get(key, [])) < count:
+            raise LogFormatError(run.metadata_path, f"no {key!r} row with {count} number(s) "
+                                 "(the session's wheel and encoder parameters)")
     table = _read_run_table(run.csv_path)
     d_right, d_left = md["Di"][0], md["Di"][1]
     counts_per_rad = md["ngear"][0] * md["encRes"][0] / (2.0 * math.pi)

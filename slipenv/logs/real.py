@@ -1,8 +1,11 @@
 """Convert the real datasets (OptiOdom, BorealTC) into slipenv-log/1 folders.
 
 The datasets live in ``<data_root>/optiodom-diffdrive`` and ``<data_root>/borealtc-husky``
-(see their READMEs). ``data_root`` defaults to ``$SLIPENV_REAL_DATA`` or, failing that, the
-project's shared data folder ``../shared/data/real`` beside the repository.
+(see their READMEs). ``data_root`` is given, or read from ``$SLIPENV_REAL_DATA``, or, failing
+both, the project's shared data folder ``../shared/data/real`` beside a source checkout. A
+root holding neither dataset is an error naming the folder looked in; a root holding one of
+them converts it with a warning naming the other's missing folder. A few runs of each ship
+inside the package (``slipenv.logs.examples``), already converted.
 
 Output layout::
 
@@ -13,6 +16,7 @@ Output layout::
 from __future__ import annotations
 
 import os
+import warnings
 from pathlib import Path
 
 from tqdm import tqdm
@@ -46,8 +50,8 @@ def convert_real_datasets(
     out_dir : str or Path
         Output folder (created); existing logs of the same name are overwritten.
     data_root : str or Path, optional
-        Folder holding ``optiodom-diffdrive/`` and ``borealtc-husky/``; a missing dataset
-        folder is skipped. Defaults to ``default_data_root()``.
+        Folder holding ``optiodom-diffdrive/`` and/or ``borealtc-husky/``; a missing dataset
+        folder is skipped with a warning. Defaults to ``default_data_root()``.
     progress : bool
         Show a tqdm progress bar.
 
@@ -55,12 +59,31 @@ def convert_real_datasets(
     -------
     list of Path
         The written log folders, OptiOdom first.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``data_root`` holds neither dataset, or no run in them (the message names the
+        folder and how to point at the data).
     """
     root = Path(data_root) if data_root is not None else default_data_root()
+    how = ("" if data_root is not None else
+           " (the default: pass data_root=... or set SLIPENV_REAL_DATA to the folder holding "
+           f"{OPTIODOM_DIR}/ and {BOREALTC_DIR}/)")
+    present = [name for name in (OPTIODOM_DIR, BOREALTC_DIR) if (root / name).is_dir()]
+    if not present:
+        raise FileNotFoundError(f"no real dataset in {root}{how}: expected {OPTIODOM_DIR}/ "
+                                f"and/or {BOREALTC_DIR}/ in it")
+    for name in [n for n in (OPTIODOM_DIR, BOREALTC_DIR) if n not in present]:
+        warnings.warn(f"{root / name} not found: that dataset is not converted", stacklevel=2)
     out = Path(out_dir)
     jobs: list[OptiOdomRun | BorealRun] = []
     jobs += list_optiodom_runs(root / OPTIODOM_DIR)
     jobs += list_borealtc_runs(root / BOREALTC_DIR)
+    if not jobs:
+        raise FileNotFoundError(f"no run files in {', '.join(str(root / n) for n in present)}"
+                                f"{how}: expected <path type>/<session>/<session>_run-NN.csv "
+                                "or <TERRAIN>/pro_NN.csv")
     written: list[Path] = []
     for job in tqdm(jobs, desc="converting real logs", unit="run", disable=not progress):
         if isinstance(job, OptiOdomRun):

@@ -113,6 +113,7 @@ class Path:
         self.length_m = starts[-1]
         self.duration_s = t_starts[-1]
         kappa_max = max(seg.max_abs_curvature_1pm for seg in segs)
+        self.max_curvature_1pm = kappa_max
         extent = MAX_SEARCH_WINDOW_M if kappa_max == 0.0 else min(MAX_SEARCH_WINDOW_M,
                                                                   0.9 * math.pi / kappa_max)
         self.search_back_m = (0.25 * extent if search_back_m is None
@@ -123,6 +124,42 @@ class Path:
     def __repr__(self) -> str:
         return (f"Path({self.name!r}, {len(self.segments)} segments, "
                 f"{self.length_m:.3f} m, {self.duration_s:.1f} s)")
+
+    @property
+    def min_turning_radius_m(self) -> float:
+        """Smallest radius of curvature along the path [m] (``inf`` for a straight path)."""
+        return math.inf if self.max_curvature_1pm == 0.0 else 1.0 / self.max_curvature_1pm
+
+    @property
+    def max_speed_mps(self) -> float:
+        """Highest reference speed along the path [m/s] (each segment's speed changes
+        monotonically, so its largest value is at one of its ends)."""
+        return max(max(seg.v0_mps, seg.v1_mps) for seg in self.segments)
+
+    @property
+    def max_yaw_rate_rps(self) -> float:
+        """An upper bound on the yaw rate the reference demands, max |speed x curvature|
+        [rad/s], taken segment by segment (exact on lines and arcs, which have one curvature).
+        """
+        return max(max(seg.v0_mps, seg.v1_mps) * seg.max_abs_curvature_1pm
+                   for seg in self.segments)
+
+    def extent(self) -> tuple[float, float, float, float]:
+        """A box ``(x_min, y_min, x_max, y_max)`` [m] holding every point of the path (the
+        union of the segments' boxes, so it may be loose; a segment without a box is
+        sampled every centimetre or every thousandth of its length)."""
+        boxes = []
+        for seg in self.segments:
+            box = seg.bounds()
+            if box is None:
+                ds = max(seg.length_m / 1000.0, 0.01)
+                pts = np.array([seg.point(min(k * ds, seg.length_m))
+                                for k in range(math.ceil(seg.length_m / ds) + 1)])
+                box = (*pts.min(axis=0), *pts.max(axis=0))
+            boxes.append(box)
+        b = np.array(boxes, dtype=float)
+        return (float(b[:, 0].min()), float(b[:, 1].min()), float(b[:, 2].max()),
+                float(b[:, 3].max()))
 
     def locate(self, s: float) -> tuple[int, float]:
         """Segment index and segment-local arc length for path arc length ``s`` (clamped)."""

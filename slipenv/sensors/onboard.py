@@ -47,13 +47,25 @@ class TorqueSensors:
 
 
 class Imu:
-    """Forward/lateral accelerometers (specific force, m/s²) and yaw gyro (rad/s)."""
+    """Forward/lateral accelerometers (specific force, m/s²) and yaw gyro (rad/s).
 
-    def __init__(self, noise: SensorNoise) -> None:
+    The gyro integrates: it reads the rotation about body z over the sample interval divided
+    by the interval (``VehicleTruth.mean_yaw_rate_rad_s``), as a MEMS gyro does behind its
+    decimation filter, so the readings times their intervals sum to the body's turn however
+    its rate varies between samples. ``sampling="instant"`` reads the rate at the sample
+    instant instead (a gyro sampled without an anti-alias filter).
+    """
+
+    SAMPLINGS = ("mean", "instant")
+
+    def __init__(self, noise: SensorNoise, sampling: str = "mean") -> None:
+        if sampling not in self.SAMPLINGS:
+            raise ValueError(f"gyro sampling {sampling!r} is not one of {self.SAMPLINGS}")
         self.std_ax = math.sqrt(noise.acc_x_var_g2) * G_MPS2
         self.std_ay = math.sqrt(noise.acc_y_var_g2) * G_MPS2
         self.std_g = math.sqrt(noise.gyro_var_rad2_s2)
         self.bias = noise.gyro_bias_rad_s
+        self.sampling = sampling
 
     def measure(self, truth: VehicleTruth, rng: np.random.Generator) -> tuple[float, float, float]:
         return self.from_normals(truth, rng.standard_normal(3))
@@ -61,10 +73,11 @@ class Imu:
     def from_normals(self, truth: VehicleTruth, e: np.ndarray) -> tuple[float, float, float]:
         """The reading given three standard normal draws ``e`` (x, y, gyro)."""
         ax, ay, _ = truth.specific_force_body_mps2
+        rate = truth.mean_yaw_rate_rad_s if self.sampling == "mean" else truth.yaw_rate_rad_s
         return (
             ax + self.std_ax * e[0],
             ay + self.std_ay * e[1],
-            truth.yaw_rate_rad_s + self.bias + self.std_g * e[2],
+            rate + self.bias + self.std_g * e[2],
         )
 
 
@@ -108,12 +121,15 @@ class SensorSuite:
     beacons : object | None
         Optional exteroceptive scanner with ``scan(t_s, x_m, y_m, yaw_rad, rng) -> (bearings,
         times)`` (``slipenv.sensors.beacons.BeaconScanner``).
+    gyro_sampling : str
+        ``"mean"`` (the rate-integrating gyro, default) or ``"instant"`` (:class:`Imu`).
     """
 
-    def __init__(self, counts_per_rad: float, noise: SensorNoise, beacons=None) -> None:
+    def __init__(self, counts_per_rad: float, noise: SensorNoise, beacons=None,
+                 gyro_sampling: str = "mean") -> None:
         self.encoders = WheelEncoders(noise.counts_per_rad or counts_per_rad)
         self.torque = TorqueSensors(noise.torque_rel_std, noise.torque_scale)
-        self.imu = Imu(noise)
+        self.imu = Imu(noise, gyro_sampling)
         self.inclinometer = Inclinometer(noise.incl_std_rad)
         self.compass = Compass(noise.compass_std_rad)
         self.beacons = beacons

@@ -23,6 +23,7 @@
 
 typedef struct {
     int link, driven, spin_index;
+    int forward_angle; /* the law takes Reina's tan_beta = v_lat/v_x (laws_relax_slip) */
     int lead_front, lead_back;
     double rut_ratio_front, rut_ratio_back; /* bekker.rut_load_ratio of each leader's rut */
     double r_eff, h, c_long, d_lat, rut_damping;
@@ -282,16 +283,18 @@ static int check_wheel(WheelLoop *self, int k)
 }
 
 /* set_wheel(k, driven, spin_index, r_eff, h, c_long, d_lat, rut_damping, lead_front,
-             lead_back, rut_ratio_front, rut_ratio_back, law, f_r): law is the force model's
-   KernelConstants (a tuple, evaluated by laws_kernel) or its Python kernel (a user's law). */
+             lead_back, rut_ratio_front, rut_ratio_back, law, f_r, forward_angle): law is the
+   force model's KernelConstants (a tuple, evaluated by laws_kernel) or its Python kernel (a
+   user's law); forward_angle: the law's slip angle is Reina's v_lat/v_x, not the sliding
+   velocity's (laws_relax_slip). */
 static PyObject *loop_set_wheel(WheelLoop *self, PyObject *args)
 {
-    int k, driven, spin_index, lead_front, lead_back;
+    int k, driven, spin_index, lead_front, lead_back, forward_angle;
     double r_eff, h, c_long, d_lat, rut_damping, ratio_front, ratio_back, f_r;
     PyObject *law;
-    if (!PyArg_ParseTuple(args, "ipidddddiiddOd", &k, &driven, &spin_index, &r_eff, &h,
+    if (!PyArg_ParseTuple(args, "ipidddddiiddOdp", &k, &driven, &spin_index, &r_eff, &h,
                           &c_long, &d_lat, &rut_damping, &lead_front, &lead_back, &ratio_front,
-                          &ratio_back, &law, &f_r))
+                          &ratio_back, &law, &f_r, &forward_angle))
         return NULL;
     if ((lead_front >= self->n) || (lead_back >= self->n)) {
         PyErr_Format(PyExc_IndexError, "leader out of range (n = %d)", self->n);
@@ -315,6 +318,7 @@ static PyObject *loop_set_wheel(WheelLoop *self, PyObject *args)
     Wheel *w = &self->w[k];
     w->driven = driven;
     w->spin_index = spin_index;
+    w->forward_angle = forward_angle;
     w->r_eff = r_eff;
     w->h = h;
     w->c_long = c_long;
@@ -741,8 +745,9 @@ static int loop_step(WheelLoop *self)
                 return -1;
             }
             double r_omega = w->r_eff * in->rate[w->spin_index];
-            double t_old = w->b, s, t, v_ref;
-            laws_relax_slip(w->s, t_old, r_omega, v_long, f.v_lat, w->h, &s, &t, &v_ref);
+            double t_old = w->b, s, t, v_ref, v_lat_ref;
+            laws_relax_slip(w->s, t_old, r_omega, v_long, f.v_lat, w->h, w->forward_angle, &s,
+                            &t, &v_ref, &v_lat_ref);
             w->s = s;
             w->b = t;
             double f_long, f_lat, res;
@@ -750,7 +755,8 @@ static int loop_step(WheelLoop *self)
                 return -1;
             w->fx = f_long;
             w->fy = f_lat;
-            double d_y = laws_lateral_damping(t - t_old, v_ref, w->d_lat, self->fade_speed);
+            /* the side damper fades with the leak of the state it damps */
+            double d_y = laws_lateral_damping(t - t_old, v_lat_ref, w->d_lat, self->fade_speed);
             double d_x = laws_longitudinal_damping(r_omega, v_long, v_ref, w->c_long,
                                                    self->low_speed);
             f_lat += d_y;
@@ -1039,8 +1045,8 @@ static PyGetSetDef loop_getset[] = {
 static PyMethodDef loop_methods[] = {
     {"set_wheel", (PyCFunction)loop_set_wheel, METH_VARARGS,
      "set_wheel(k, driven, spin_index, r_eff, h, c_long, d_lat, rut_damping, lead_front, "
-     "lead_back, rut_ratio_front, rut_ratio_back, law, f_r): bind wheel k's constants and "
-     "force law (KernelConstants or a Python kernel), once per soil sample."},
+     "lead_back, rut_ratio_front, rut_ratio_back, law, f_r, forward_angle): bind wheel k's "
+     "constants and force law (KernelConstants or a Python kernel), once per soil sample."},
     {"reset", (PyCFunction)loop_reset, METH_NOARGS, "Zero every wheel's state."},
     {"apply", (PyCFunction)loop_apply, METH_NOARGS,
      "One substep's forces: query PyBullet, compute, apply."},

@@ -14,7 +14,9 @@ called back as its Python kernel (`slipenv.terramechanics.wheel_kernel`). This c
 the per-wheel constants once per control step, when it samples the soil under each wheel from
 the soil map (a wheel moves millimetres in one step; maps blend over decimetres).
 
-Slip follows the convention of ``slipenv.terramechanics.contact``; the slip states relax over
+Slip follows the convention of ``slipenv.terramechanics.contact``, the slip angle that of each
+wheel's force law (`models.slip_angle_convention`: Reina's v_lat/v_x for Reina's law, the
+sliding velocity's for the shear laws, `slip_dynamics.relax_slip`); the slip states relax over
 the contact's own length (`slip_dynamics.contact_relaxation_length_m`): for a wheel the front
 arc r acos(1 - z/r) at its Bekker sinkage z under the static load share (Wong Ch. 5; Pacejka
 §7.2.1, sigma ~ a), floored at ``min_relaxation_m``. The road wheels of the old per-wheel track
@@ -44,7 +46,7 @@ from slipenv.sim.bullet_native import PYBULLET_API_ENV, client_table, python_api
 from slipenv.sim.compiled import wheel_loop_module
 from slipenv.terramechanics.bekker import rut_load_ratio, wheel_sinkage_float_m
 from slipenv.terramechanics.contact import ContactGeometry
-from slipenv.terramechanics.models import ForceModel, wheel_kernel
+from slipenv.terramechanics.models import ForceModel, slip_angle_convention, wheel_kernel
 from slipenv.terramechanics.slip_dynamics import (
     contact_relaxation_length_m,
     critical_damping_ns_per_m,
@@ -63,7 +65,8 @@ _DS = 1e-3  # [-] slip step of the finite-difference slip stiffness
 class WheelContactState:
     """Per-wheel quantities of the last substep (ground truth for ``info``).
 
-    Arrays of shape (n_wheels,): slip ratio, tan of slip angle, normal load [N], longitudinal
+    Arrays of shape (n_wheels,): slip ratio, tan of slip angle (the relaxed state, in the
+    wheel's law's convention: `models.slip_angle_convention`), normal load [N], longitudinal
     force (traction, before resistance) and lateral force [N], motion resistance [N], contact,
     and ``damper_n`` [N]: the numerical dampers' share of the force applied at the wheel, |soil
     longitudinal damper| + |soil lateral damper| + |pre-sliding damper of the resistance
@@ -129,9 +132,10 @@ class WheelSoilInjector:
         ``low_speed_mps``, on rω - v. The pre-sliding damper of the resistance element uses the
         same ratio.
     damping_speed_mps : float
-        Speed scale of the sideways damper [m/s]: weighted 1 / (1 + (V / this)⁴), about 1 at
-        the tracked vehicle's 5 cm/s and about 0.01 at 0.6 m/s, where the relaxation leak
-        V/σ already damps the spring.
+        Speed scale of the sideways damper [m/s]: weighted 1 / (1 + (V_b / this)⁴), V_b the
+        leak speed of the lateral slip state (`slip_dynamics.relax_slip`), about 1 at the
+        tracked vehicle's 5 cm/s and about 0.01 at 0.6 m/s, where the relaxation leak V_b/σ
+        already damps the spring.
     multi_pass : bool
         If True, a wheel running in the rut of the wheel ahead of it (same side, its contact
         within half a width of that wheel's line) meets only the compaction of the soil below
@@ -206,6 +210,7 @@ class WheelSoilInjector:
         self._f_r = float(getattr(force_model, "rolling_resistance_coeff", 0.0))
         self.leaders = _rut_leaders(spec) if self.multi_pass else [(-1, -1)] * self.n
         self._models = _wheel_models(spec, force_model, castor_own_geometry)
+        self._forward_angle = [slip_angle_convention(m) == "reina" for m in self._models]
         self._loop = wheel_loop_module().WheelLoop(
             p, self.body_id, self.ground_id, self.client, list(self.links),
             list(self.spin_joints), self.dt_s, self.resistance_stick_m, self.damping_speed_mps,
@@ -300,7 +305,7 @@ class WheelSoilInjector:
                 laws[id(model), id(sp)] = law = law if law is not None else self._kernels[k]
             set_wheel(k, self.driven[k], self.spin_index[k], self._r_eff[k], self._h[k],
                       *self._damping[k], self._rut_damping[k], *self.leaders[k],
-                      *self._rut_ratio[k], law, self._f_r)
+                      *self._rut_ratio[k], law, self._f_r, self._forward_angle[k])
 
     def soil_at_wheel(self, k: int) -> SoilParams:
         """The soil (floats) under wheel ``k`` at the last `sample_soil` (read-only)."""

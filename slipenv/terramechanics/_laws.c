@@ -148,11 +148,16 @@ static PyObject *fn_kernel(PyObject *mod, PyObject *const *args, Py_ssize_t narg
 
 static PyObject *fn_relax_slip(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
 {
-    double a[6], s, t, v;
-    if (floats(args, nargs, 6, "relax_slip", a) < 0)
+    double a[6], s, t, v, v_b;
+    if (nargs != 7) {
+        PyErr_Format(PyExc_TypeError, "relax_slip() takes 7 arguments (%zd given)", nargs);
         return NULL;
-    laws_relax_slip(a[0], a[1], a[2], a[3], a[4], a[5], &s, &t, &v);
-    return Py_BuildValue("(ddd)", s, t, v);
+    }
+    int forward = PyObject_IsTrue(args[6]);
+    if (forward < 0 || floats(args, 6, 6, "relax_slip", a) < 0)
+        return NULL;
+    laws_relax_slip(a[0], a[1], a[2], a[3], a[4], a[5], forward, &s, &t, &v, &v_b);
+    return Py_BuildValue("(dddd)", s, t, v, v_b);
 }
 
 static PyObject *fn_lateral(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
@@ -240,6 +245,43 @@ static PyObject *fn_resistance(PyObject *mod, PyObject *const *args, Py_ssize_t 
     return PyFloat_FromDouble(laws_motion_resistance(a[0], a[1], a[2], a[3]));
 }
 
+static PyObject *fn_slip_sinkage_factor(PyObject *mod, PyObject *const *args,
+                                        Py_ssize_t nargs)
+{
+    double s;
+    if (floats(args, nargs, 1, "slip_sinkage_factor", &s) < 0)
+        return NULL;
+    return PyFloat_FromDouble(laws_slip_sinkage_factor(s));
+}
+
+static PyObject *fn_bulldozing_coefficients(PyObject *mod, PyObject *const *args,
+                                            Py_ssize_t nargs)
+{
+    double phi, d1, d2;
+    if (floats(args, nargs, 1, "bulldozing_coefficients", &phi) < 0)
+        return NULL;
+    laws_bulldozing_coefficients(phi, &d1, &d2);
+    return Py_BuildValue("(dd)", d1, d2);
+}
+
+static PyObject *fn_bulldozing(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
+{
+    double a[4];
+    if (floats(args, nargs, 4, "bulldozing_resistance_n_per_m", a) < 0)
+        return NULL;
+    return PyFloat_FromDouble(laws_bulldozing_per_width(a[0], a[1], a[2], a[3]));
+}
+
+static PyObject *fn_slip_sinkage_resistance(PyObject *mod, PyObject *const *args,
+                                            Py_ssize_t nargs)
+{
+    double a[8];
+    if (floats(args, nargs, 8, "slip_sinkage_resistance_n", a) < 0)
+        return NULL;
+    return PyFloat_FromDouble(
+        laws_slip_sinkage_resistance(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]));
+}
+
 static PyObject *fn_okello_h(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
 {
     double x;
@@ -315,7 +357,8 @@ static PyMethodDef module_methods[] = {
     FAST("kernel", fn_kernel,
          "kernel(constants, slip, tan_beta, load_n) -> (fx_n, fy_n, resistance_n)"),
     FAST("relax_slip", fn_relax_slip,
-         "relax_slip(slip, tan_beta, rim, v_long, v_lat, h) -> (slip, tan_beta, v_ref)"),
+         "relax_slip(slip, tan_beta, rim, v_long, v_lat, h, forward) -> (slip, tan_beta, v_ref, "
+         "v_lat_ref)"),
     FAST("lateral_soil_damping_n", fn_lateral,
          "lateral_soil_damping_n(change, v_ref, d, fade_speed)"),
     FAST("longitudinal_soil_damping_n", fn_longitudinal,
@@ -334,6 +377,14 @@ static PyMethodDef module_methods[] = {
     FAST("multi_pass_resistance_n", fn_multi_pass,
          "multi_pass_resistance_n(res, load, lead_res, lead_load, f_r)"),
     FAST("motion_resistance_n", fn_resistance, "motion_resistance_n(load, f_r, gamma, e)"),
+    FAST("slip_sinkage_factor", fn_slip_sinkage_factor, "slip_sinkage_factor(slip)"),
+    FAST("bulldozing_coefficients", fn_bulldozing_coefficients,
+         "bulldozing_coefficients(phi) -> (d1, d2)"),
+    FAST("bulldozing_resistance_n_per_m", fn_bulldozing,
+         "bulldozing_resistance_n_per_m(depth, cohesion, phi, unit_weight)"),
+    FAST("slip_sinkage_resistance_n", fn_slip_sinkage_resistance,
+         "slip_sinkage_resistance_n(slip, compaction, n, sinkage, width, cohesion, phi, "
+         "unit_weight)"),
     FAST("okello_h", fn_okello_h, "okello_h(x)"),
     FAST("exp_secant", fn_exp_secant, "exp_secant(y)"),
     FAST("janosi_forces", fn_janosi,

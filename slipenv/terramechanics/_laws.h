@@ -4,8 +4,10 @@
  *
  * Plain C99 on doubles, no Python: each function is one law, with the paper and equation it
  * implements. The conventions are those of slipenv.terramechanics.contact: slip s > 0 drives,
- * tan_beta = v_lat/|v_long|, forces in the wheel's heading frame (fx forward, fy to the left),
- * a resistance is a magnitude applied against the travel. The docstrings of the Python
+ * tan_beta = v_lat/|v_long| (Reina Eq. 4) for Reina's law and v_lat/max(|r omega|, |v_long|)
+ * (the direction of the sliding velocity) for the Janosi and linear laws (laws_relax_slip),
+ * forces in the wheel's heading frame (fx forward, fy to the left), a resistance is a
+ * magnitude applied against the travel. The docstrings of the Python
  * functions of the same names (slip_dynamics.py, bekker.py, janosi.py, lindgren.py, reina.py,
  * models.py) say the same in words; tests/terramechanics/reference_laws.py is an independent
  * Python transcription the tests compare against.
@@ -20,29 +22,35 @@ static inline double laws_clip1(double v) { return v > 1.0 ? 1.0 : (v < -1.0 ? -
 /* -- slip as a state (slip_dynamics.py) ------------------------------------------------- */
 
 /* One backward-Euler step of the slip relaxation ODE (Pacejka, Tyre and Vehicle Dynamics,
- * §7.2.1): sigma ds/dt + V s = r omega - v, sigma db/dt + V b = v_lat with
- * V = max(|r omega|, |v|, |v_lat|); with h = dt/sigma,
- * s' = (s + h (r omega - v))/(1 + h V), b' = (b + h v_lat)/(1 + h V), each clipped to [-1, 1].
- * Writes s', b' and V (the speed the dampers fade with). */
+ * §7.2.1): sigma ds/dt + V s = r omega - v, sigma db/dt + V_b b = v_lat with
+ * V = max(|r omega|, |v|, |v_lat|) and V_b the lateral state's reference speed: V_b = V for a
+ * law whose slip angle follows the sliding velocity (Janosi, linear: b -> v_lat/V), or
+ * V_b = max(|v|, |v_lat|) for a law in Reina's convention (forward != 0: b -> v_lat/|v|,
+ * Reina Eq. 4, up to 45 deg, and +-1 beyond). With h = dt/sigma,
+ * s' = (s + h (r omega - v))/(1 + h V), b' = (b + h v_lat)/(1 + h V_b), each clipped to
+ * [-1, 1]: no division by a speed, finite at v = 0. Writes s', b', V (the speed the
+ * lengthwise damper fades with) and V_b (the lateral damper's). */
 static inline void laws_relax_slip(double slip, double tan_beta, double rim, double v_long,
-                                   double v_lat, double h, double *s_out, double *t_out,
-                                   double *v_ref_out)
+                                   double v_lat, double h, int forward, double *s_out,
+                                   double *t_out, double *v_ref_out, double *v_lat_ref_out)
 {
-    double v_ref = fabs(rim);
-    if (fabs(v_long) > v_ref)
-        v_ref = fabs(v_long);
-    if (fabs(v_lat) > v_ref)
-        v_ref = fabs(v_lat);
-    double leak = 1.0 + h * v_ref;
-    *s_out = laws_clip1((slip + h * (rim - v_long)) / leak);
-    *t_out = laws_clip1((tan_beta + h * v_lat) / leak);
+    double v_side = fabs(v_lat);
+    double v_fwd = fabs(v_long);
+    double v_lat_ref = v_fwd > v_side ? v_fwd : v_side;
+    double v_ref = fabs(rim) > v_lat_ref ? fabs(rim) : v_lat_ref;
+    if (!forward)
+        v_lat_ref = v_ref;
+    *s_out = laws_clip1((slip + h * (rim - v_long)) / (1.0 + h * v_ref));
+    *t_out = laws_clip1((tan_beta + h * v_lat) / (1.0 + h * v_lat_ref));
     *v_ref_out = v_ref;
+    *v_lat_ref_out = v_lat_ref;
 }
 
 /* Side damper on the lateral shear-deformation rate, faded with speed [N]:
- * F = -d delta(tan_beta)/(1 + (V/v_f)^4) (LuGre's sigma_1 term, Canudas de Wit, Olsson,
+ * F = -d delta(tan_beta)/(1 + (V_b/v_f)^4) (LuGre's sigma_1 term, Canudas de Wit, Olsson,
  * Astrom and Lischinsky, IEEE TAC 40(3), 1995; faded with speed as in Canudas de Wit et al.
- * 2003). Zero in steady side slip. */
+ * 2003), V_b the lateral state's leak speed (laws_relax_slip): it damps the spring where the
+ * leak does not. Zero in steady side slip. */
 static inline double laws_lateral_damping(double tan_beta_change, double v_ref, double d,
                                           double fade_speed)
 {
@@ -153,6 +161,61 @@ static inline double laws_motion_resistance(double load, double f_r, double gamm
     return res;
 }
 
+/* -- slip sinkage and bulldozing (bekker.py, sidewall.py) ------------------------------- */
+
+/* Lyasko's slip-sinkage factor z/z0 = (1 + i)/(1 - 0.5 i), i the slip clipped to [0, 1]
+ * (Lyasko, "Slip sinkage effect in soil-vehicle mechanics", J. Terramech. 47 (2010) 21-31):
+ * the sinkage of a slipping wheel over its static sinkage z0; 1 at i = 0, 4 at i = 1. */
+static inline double laws_slip_sinkage_factor(double slip)
+{
+    double i = slip > 1.0 ? 1.0 : (slip > 0.0 ? slip : 0.0);
+    return (1.0 + i) / (1.0 - 0.5 * i);
+}
+
+#define LAWS_QUARTER_PI 0.78539816339744830962
+
+/* Bekker's bulldozing coefficients D_1 = cot X_c + tan(X_c + phi),
+ * D_2 = cot X_c + cot^2 X_c tan phi, X_c = pi/4 - phi/2 (Bekker, Theory of Land Locomotion,
+ * 1956, pp. 280-282; Ishigami, Miwa, Nagatani and Yoshida, J. Field Robotics 24(3), 2007). */
+static inline void laws_bulldozing_coefficients(double phi, double *d1, double *d2)
+{
+    double xc = LAWS_QUARTER_PI - 0.5 * phi;
+    double cot = 1.0 / tan(xc);
+    *d1 = cot + tan(xc + phi);
+    *d2 = cot + cot * cot * tan(phi);
+}
+
+/* Bekker's bulldozing resistance per unit width of a wall pushing soil at depth h,
+ * R_b = D_1 (c h + D_2 gamma h^2/2) [N/m] (Bekker 1956, pp. 280-282; Wong, Theory of Ground
+ * Vehicles, Ch. 5, bulldozing resistance); h <= 0 gives 0. */
+static inline double laws_bulldozing_per_width(double depth, double cohesion, double phi,
+                                               double unit_weight)
+{
+    if (!(depth > 0.0))
+        return 0.0;
+    double d1, d2;
+    laws_bulldozing_coefficients(phi, &d1, &d2);
+    return d1 * (cohesion * depth + 0.5 * d2 * unit_weight * depth * depth);
+}
+
+/* Resistance a slipping wheel adds to its static one [N], >= 0 and 0 at zero slip: its
+ * sinkage grows to z = z0 f(|s|) (laws_slip_sinkage_factor; Lyasko 2010), so the Bekker
+ * compaction R_c = b k_eq z^(n+1)/(n+1) (Wong, Theory of Ground Vehicles, Ch. 5) grows to
+ * R_c0 f^(n+1), and the soil the slip digs out below the static rut, depth z0 (f - 1), is
+ * pushed ahead of the wheel's front of width b: b R_b(z0 (f - 1)) (laws_bulldozing_per_width).
+ * compaction = R_c0 at the static sinkage z0 (sinkage). Braking or locked (s < 0) is taken
+ * as the slip of the same magnitude (Lyasko measured driven wheels; the soil under a skidding
+ * wheel is sheared and dug out the same way). */
+static inline double laws_slip_sinkage_resistance(double slip, double compaction, double n,
+                                                  double sinkage, double width,
+                                                  double cohesion, double phi,
+                                                  double unit_weight)
+{
+    double f = laws_slip_sinkage_factor(fabs(slip));
+    return compaction * (pow(f, n + 1.0) - 1.0)
+           + width * laws_bulldozing_per_width(sinkage * (f - 1.0), cohesion, phi, unit_weight);
+}
+
 /* -- force laws (janosi.py, lindgren.py, reina.py) -------------------------------------- */
 
 #define LAWS_X_SMALL 1e-5
@@ -172,7 +235,12 @@ static inline double laws_exp_secant(double y) { return y > LAWS_TINY ? -expm1(-
 /* Janosi-Hanamoto shear integrated over the patch, combined slip split by direction
  * (Lindgren Eq. 2-3, 18-20; Reina Eq. 7): F = F_max g(sigma L/K), F_max = A c + W tan phi,
  * fx = F s/sigma, fy = -F kappa tan_beta/sigma, sigma = hypot(s, kappa tan_beta), written as
- * F/sigma = F_max h(sigma L/K) L/K. W <= 0: no force. */
+ * F/sigma = F_max h(sigma L/K) L/K. W <= 0: no force. Its input is the slip in the
+ * sliding-velocity convention (laws_relax_slip): the shear displacement j of Eq. 2 at a point
+ * x along the patch is the sliding velocity (r omega - v, v_lat) times the time x/(r omega) the
+ * rim point has been in contact, so in drive j/x = (s, v_lat/(r omega)) (Wong, Theory of Ground
+ * Vehicles, Ch. 5: j = i x), i.e. tan_beta = (1 - s) v_lat/v_x, and the split by direction is
+ * along the sliding velocity whatever the reference speed. */
 static inline void laws_janosi(double slip, double tan_beta, double load, double ac,
                                double tan_phi, double ratio, double kappa, double *fx,
                                double *fy)
@@ -207,7 +275,9 @@ static inline void laws_linear(double slip, double tan_beta, double load, double
 
 /* Reina's combined-slip law (Reina Eq. 5-9): the pure-slip curves at sigma = hypot(s, tan_beta)
  * (Eq. 7) split by direction (Eq. 8-9), fx = s k_x, fy = -tan_beta k_y with
- * k = C (1 - e^{-y})/y - W A, y = C sigma/(mu W), each k floored at 0. */
+ * k = C (1 - e^{-y})/y - W A, y = C sigma/(mu W), each k floored at 0. Inputs in Reina's
+ * convention, s = 1 - v_x/(r omega) (Eq. 3) and tan_beta = v_lat/v_x (Eq. 4): the relaxed
+ * state of laws_relax_slip with forward != 0. */
 static inline void laws_reina(double slip, double tan_beta, double load, double mu, double c_x,
                               double c_y, double a_x, double a_y, double *fx, double *fy)
 {
@@ -249,9 +319,14 @@ typedef struct {
     int gross;                         /* Reina with compaction: gross thrust */
     double gross_c_x, gross_w_ref;     /* C_x as given; W_ref when scaled, else 0 */
     double f_r, gamma, exponent;       /* resistance f_r W + gamma W^e */
+    int slip_sinkage;                  /* add laws_slip_sinkage_resistance */
+    double ss_gamma, ss_exponent;      /* the wheel's Bekker compaction gamma W^e */
+    double width, diameter, k_c, k_phi, n; /* its static sinkage (laws_wheel_sinkage) */
+    double cohesion, phi, unit_weight; /* bulldozing (laws_bulldozing_per_width) */
 } LawsKernel;
 
-/* (fx, fy, resistance) [N] of one wheel: the model's force law, plus its motion resistance. */
+/* (fx, fy, resistance) [N] of one wheel: the model's force law, plus its motion resistance
+ * (with slip_sinkage, plus what the slip adds: laws_slip_sinkage_resistance). */
 static inline void laws_kernel(const LawsKernel *k, double slip, double tan_beta, double load,
                                double *fx, double *fy, double *res)
 {
@@ -268,6 +343,12 @@ static inline void laws_kernel(const LawsKernel *k, double slip, double tan_beta
         laws_reina(slip, tan_beta, load, k->mu, k->c_x, k->c_y, k->a_x, k->a_y, fx, fy);
     }
     *res = laws_motion_resistance(load, k->f_r, k->gamma, k->exponent);
+    if (k->slip_sinkage && slip != 0.0 && load > 0.0) {
+        double z0 = laws_wheel_sinkage(load, k->width, k->diameter, k->k_c, k->k_phi, k->n);
+        double rc0 = laws_motion_resistance(load, 0.0, k->ss_gamma, k->ss_exponent);
+        *res += laws_slip_sinkage_resistance(slip, rc0, k->n, z0, k->width, k->cohesion,
+                                             k->phi, k->unit_weight);
+    }
     if (k->gross)
         *fx += laws_reina_gross_extra(slip, tan_beta, load, k->gamma, k->exponent,
                                       k->gross_c_x, k->mu, k->scaled ? k->gross_w_ref : load);
@@ -335,13 +416,17 @@ static inline int laws_contact_frame(const double patch[6], double load, const d
 /* -- Python glue (only where Python.h is included) --------------------------------------- */
 #ifdef Py_PYTHON_H
 /* Read a KernelConstants tuple (kind, ac, tan_phi, ratio, kappa, mu, c_x, c_y, a_x, a_y,
- * scaled, gross, gross_c_x, gross_w_ref, f_r, gamma, exponent) into k; -1 with an exception. */
+ * scaled, gross, gross_c_x, gross_w_ref, f_r, gamma, exponent, slip_sinkage, ss_gamma,
+ * ss_exponent, width, diameter, k_c, k_phi, n, cohesion, phi, unit_weight) into k; -1 with an
+ * exception. */
 static int laws_parse_kernel(PyObject *constants, LawsKernel *k)
 {
-    if (!PyArg_ParseTuple(constants, "idddddddddppddddd;kernel constants", &k->kind, &k->ac,
-                          &k->tan_phi, &k->ratio, &k->kappa, &k->mu, &k->c_x, &k->c_y, &k->a_x,
-                          &k->a_y, &k->scaled, &k->gross, &k->gross_c_x, &k->gross_w_ref,
-                          &k->f_r, &k->gamma, &k->exponent))
+    if (!PyArg_ParseTuple(constants, "idddddddddppdddddpdddddddddd;kernel constants", &k->kind,
+                          &k->ac, &k->tan_phi, &k->ratio, &k->kappa, &k->mu, &k->c_x, &k->c_y,
+                          &k->a_x, &k->a_y, &k->scaled, &k->gross, &k->gross_c_x,
+                          &k->gross_w_ref, &k->f_r, &k->gamma, &k->exponent, &k->slip_sinkage,
+                          &k->ss_gamma, &k->ss_exponent, &k->width, &k->diameter, &k->k_c,
+                          &k->k_phi, &k->n, &k->cohesion, &k->phi, &k->unit_weight))
         return -1;
     if (k->kind < LAWS_JANOSI || k->kind > LAWS_REINA) {
         PyErr_Format(PyExc_ValueError, "unknown force law kind %d", k->kind);

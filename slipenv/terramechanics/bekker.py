@@ -41,6 +41,7 @@ import slipenv.terramechanics._laws as _laws
 from slipenv.terramechanics.vectorize import array_law
 
 __all__ = [
+    "slip_sinkage_factor",
     "wheel_sinkage_m",
     "pressure_sinkage_m",
     "track_sinkage_m",
@@ -50,6 +51,16 @@ __all__ = [
     "rut_following_compaction_n",
     "rut_load_ratio",
 ]
+
+
+def slip_sinkage_factor(slip: float) -> float:
+    """Lyasko's slip-sinkage factor z/z0 = (1 + i)/(1 - 0.5 i), slip i clipped to [0, 1]
+    (Lyasko, "Slip sinkage effect in soil-vehicle mechanics", J. Terramech. 47 (2010) 21-31):
+    a wheel slipping at i sinks to f z0, z0 its static sinkage; 1 at i = 0, 4 at i = 1.
+    The C law ``laws_slip_sinkage_factor`` (``_laws.h``), which the simulation runs when a
+    force model's ``slip_sinkage`` is on (`models.slip_sinkage_resistance`).
+    """
+    return _laws.slip_sinkage_factor(slip)
 
 
 def wheel_sinkage_float_m(load_n: float, width_m: float, diameter_m: float, k_c: float,

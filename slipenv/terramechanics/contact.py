@@ -12,7 +12,11 @@ wheel's rolling direction, y to the left, z up):
   wheel at v = 0 has s = 1, a locked wheel sliding forward s = -1. Reversing is the mirror
   image: r omega = -1, v = -0.9 gives s = -0.1 and a backward push. A wheel turning against
   the motion (r omega, v of opposite signs) is clipped to s = +-1.
-* ``tan_beta = v_lateral / |v_longitudinal|`` (Reina Eq. 4), v_lateral positive to the left.
+* ``tan_beta``, v_lateral positive to the left, in the law's slip-angle convention
+  (`models.slip_angle_convention`): ``v_lateral / |v_longitudinal|`` (Reina Eq. 4) for
+  Reina's law; along the sliding velocity, ``v_lateral / max(|r_eff omega|, |v|)``, for the
+  Janosi and linear laws, whose shear displacement is the sliding velocity times the time a
+  rim point has been in contact (`slip_dynamics`; in drive ``(1 - s) v_lateral / v``).
 * normal load W [N], >= 0 (0 when the wheel is off the ground).
 
 and return ``(fx_n, fy_n)`` [N] in the same frame: fx > 0 pushes forward (sign(fx) = sign(s)),

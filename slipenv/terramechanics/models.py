@@ -34,8 +34,10 @@ from slipenv.terramechanics.contact import ContactGeometry
 from slipenv.terramechanics.soil import SoilParams
 from slipenv.terramechanics.vectorize import Kernel, forces_on_arrays
 
-__all__ = ["ForceModel", "JanosiForceModel", "KernelConstants", "LinearSlipForceModel",
-           "ReinaForceModel", "FORCE_MODELS", "force_model_by_name", "wheel_kernel"]
+__all__ = ["DEFAULT_UNIT_WEIGHT_N_M3", "SLIP_SINKAGE_MODES", "ForceModel", "JanosiForceModel",
+           "KernelConstants", "LinearSlipForceModel", "ReinaForceModel", "FORCE_MODELS",
+           "force_model_by_name", "slip_angle_convention", "slip_sinkage_resistance",
+           "wheel_kernel"]
 
 
 @runtime_checkable
@@ -46,7 +48,8 @@ class ForceModel(Protocol):
     wheel's heading frame: fx > 0 pushes forward; fy opposes lateral sliding,
     sign(fy) = -sign(tan_beta). ``resistance_n(load_n, soil)`` returns the magnitude (>= 0) of
     the motion resistance (compaction + rolling), applied against the direction of travel.
-    A model may also offer ``scalar_kernel(soil)`` (see `wheel_kernel`), the fast path.
+    A model may also offer ``scalar_kernel(soil)`` (see `wheel_kernel`), the fast path, and
+    ``slip_angle_convention`` (`slip_angle_convention`), the tan_beta its law takes.
     """
 
     def __call__(self, slip: np.ndarray, tan_beta: np.ndarray, load_n: np.ndarray,
@@ -82,6 +85,31 @@ def wheel_kernel(model: ForceModel, soil: SoilParams) -> Kernel:
     return array_kernel
 
 
+def slip_angle_convention(model: ForceModel) -> str:
+    """The slip angle `model`'s law takes: ``"reina"`` or ``"sliding"``.
+
+    ``"reina"``: tan_beta = v_lat/|v_x| (Reina Eq. 4), the convention Reina's law was fitted
+    in. ``"sliding"``: tan_beta = v_lat/max(|r omega|, |v_x|), (s, tan_beta) along the contact
+    point's sliding velocity, the shear displacement per unit patch length of the Janosi and
+    linear laws (`JanosiForceModel`). The simulation relaxes the slip state to the model's
+    convention (`slip_dynamics.relax_slip`). Read from the model's ``slip_angle_convention``
+    attribute; a wrapper without one (a model with a ``base`` law, such as the diagnosis's
+    scaled-slip wrapper) takes its base's; any other law the sliding one.
+    """
+    law: Any = model
+    for _ in range(32):  # wrappers of wrappers, never a cycle
+        convention = getattr(law, "slip_angle_convention", None)
+        if convention is not None:
+            if convention not in ("reina", "sliding"):
+                raise ValueError(f"slip_angle_convention={convention!r} of {law!r} must be "
+                                 "'reina' or 'sliding'")
+            return str(convention)
+        law = getattr(law, "base", None)
+        if law is None:
+            break
+    return "sliding"
+
+
 class KernelConstants(NamedTuple):
     """A force model bound to one soil, as its C law reads it (``_laws.h``, ``LawsKernel``;
     field order is the C side's).
@@ -106,6 +134,54 @@ class KernelConstants(NamedTuple):
     rolling_resistance_coeff: float  # f_r
     compaction_gamma: float  # gamma of gamma W^e (0: rigid ground or none)
     compaction_exponent: float  # e
+    slip_sinkage: bool = False  # add `slip_sinkage_resistance`
+    sinkage_gamma: float = 0.0  # the wheel's Bekker compaction gamma W^e, for slip sinkage
+    sinkage_exponent: float = 1.0
+    width_m: float = 0.0  # b, D, k_c, k_phi, n of its static sinkage (`bekker`)
+    diameter_m: float = 0.0
+    k_c: float = 0.0
+    k_phi: float = 0.0
+    n_exp: float = 1.0
+    cohesion_pa: float = 0.0  # c, phi, gamma_s of the bulldozing (`sidewall`)
+    friction_angle_rad: float = 0.0
+    unit_weight_n_m3: float = 0.0
+
+
+SLIP_SINKAGE_MODES = (None, "bulldozing", "full")
+"""Values of the models' ``slip_sinkage`` option (`slip_sinkage_resistance`): None, off (the
+resistance at the static sinkage only); ``"bulldozing"``, the soil the slip digs out below the
+static rut is bulldozed ahead of the wheel; ``"full"``, that plus the Bekker compaction at the
+slip sinkage."""
+
+DEFAULT_UNIT_WEIGHT_N_M3 = 1.5e3 * 9.81
+"""Soil unit weight gamma_s [N/m^3] of the bulldozing term when none is given: a dry sand of
+bulk density 1.5 t/m^3 (assumed; loose to medium dry sands are 1.4-1.7 t/m^3, Wong, Theory of
+Ground Vehicles, Ch. 2; Toyoura sand 1.335 t/m^3 loose)."""
+
+
+def slip_sinkage_resistance(slip: float, load_n: float, constants: KernelConstants) -> float:
+    """Resistance [N] a wheel slipping at `slip` adds to its static motion resistance.
+
+    Lyasko's slip sinkage z = z0 (1 + i)/(1 - 0.5 i), i = |s| clipped to [0, 1] (Lyasko,
+    "Slip sinkage effect in soil-vehicle mechanics", J. Terramech. 47 (2010) 21-31), raises
+    the Bekker compaction R_c = b k_eq z^(n+1)/(n+1) (Wong, Theory of Ground Vehicles, Ch. 5)
+    from R_c0 to R_c0 f^(n+1), and the soil the slip digs out below the static rut, depth
+    z0 (f - 1), is bulldozed ahead of the wheel's front: b R_b(z0 (f - 1)), Bekker's
+    R_b(h) = D_1 (c h + D_2 gamma_s h^2/2) per unit width (Bekker, Theory of Land Locomotion,
+    1956, pp. 280-282; `sidewall.bulldozing_resistance_n_per_m`). Zero at zero slip, >= 0 and
+    non-decreasing in |s|; a skidding wheel (s < 0, locked at s = -1) counts as the slip of
+    the same magnitude (assumed: Lyasko measured driven wheels). The C law
+    ``laws_slip_sinkage_resistance`` of ``_laws.h``, with the wheel's static sinkage
+    `bekker.wheel_sinkage_float_m` at `load_n` and its compaction gamma W^e. 0 unless
+    ``constants.slip_sinkage``.
+    """
+    c = constants
+    if not c.slip_sinkage or load_n <= 0.0:
+        return 0.0
+    z0 = _laws.wheel_sinkage_m(load_n, c.width_m, c.diameter_m, c.k_c, c.k_phi, c.n_exp)
+    rc0 = _laws.motion_resistance_n(load_n, 0.0, c.sinkage_gamma, c.sinkage_exponent)
+    return _laws.slip_sinkage_resistance_n(slip, rc0, c.n_exp, z0, c.width_m, c.cohesion_pa,
+                                           c.friction_angle_rad, c.unit_weight_n_m3)
 
 
 class _PatchModel(ABC):
@@ -115,8 +191,13 @@ class _PatchModel(ABC):
     Constructor arguments as documented on `JanosiForceModel`.
     """
 
+    # The slip angle the law takes (`slip_angle_convention`): the shear laws', along the
+    # sliding velocity.
+    slip_angle_convention = "sliding"
+
     def __init__(self, geometry: ContactGeometry, rolling_resistance_coeff: float = 0.01,
-                 lateral_stiffness_ratio: float = 1.0) -> None:
+                 lateral_stiffness_ratio: float = 1.0, slip_sinkage: str | None = None,
+                 soil_unit_weight_n_m3: float = DEFAULT_UNIT_WEIGHT_N_M3) -> None:
         if not isinstance(geometry, ContactGeometry):
             raise TypeError(f"geometry must be a ContactGeometry, got {type(geometry).__name__}")
         coeff = float(rolling_resistance_coeff)
@@ -127,9 +208,22 @@ class _PatchModel(ABC):
         if not (math.isfinite(ratio) and ratio > 0.0):
             raise ValueError(f"lateral_stiffness_ratio={lateral_stiffness_ratio!r} must be "
                              "finite and > 0")
+        unit_weight = float(soil_unit_weight_n_m3)
+        if not (math.isfinite(unit_weight) and unit_weight >= 0.0):
+            raise ValueError(f"soil_unit_weight_n_m3={soil_unit_weight_n_m3!r} must be finite "
+                             "and >= 0")
+        if slip_sinkage not in SLIP_SINKAGE_MODES:
+            raise ValueError(f"slip_sinkage={slip_sinkage!r} must be one of "
+                             f"{SLIP_SINKAGE_MODES!r}")
+        if slip_sinkage is not None and geometry.is_track:
+            raise ValueError("slip_sinkage is the rigid wheel's law; a track's contact "
+                             "(ContactGeometry.track_length_m) has its own "
+                             "(slipenv.terramechanics.track)")
         self.geometry = geometry
         self.rolling_resistance_coeff = coeff
         self.lateral_stiffness_ratio = ratio
+        self.slip_sinkage = slip_sinkage
+        self.soil_unit_weight_n_m3 = unit_weight
 
     @abstractmethod
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
@@ -168,6 +262,24 @@ class _PatchModel(ABC):
                                                    soil.k_phi, soil.n_exp, soil.deformable)
         return float(gamma), float(exponent)
 
+    def _slip_sinkage_constants(self, soil: SoilParams) -> dict[str, Any]:
+        """The slip-sinkage fields of `KernelConstants` (`slip_sinkage_resistance`), by name:
+        off unless asked for and the ground is deformable."""
+        deformable = float(soil.deformable)
+        if self.slip_sinkage is None or deformable <= 0.0:
+            return {}  # the NamedTuple's defaults: off
+        g = self.geometry
+        gamma, exponent = wheel_compaction_law(g.width_m, 2.0 * g.radius_m, soil.k_c,
+                                               soil.k_phi, soil.n_exp, deformable)
+        return {"slip_sinkage": True,
+                "sinkage_gamma": 0.0 if self.slip_sinkage == "bulldozing" else float(gamma),
+                "sinkage_exponent": float(exponent), "width_m": float(g.width_m),
+                "diameter_m": 2.0 * float(g.radius_m), "k_c": float(soil.k_c),
+                "k_phi": float(soil.k_phi), "n_exp": float(soil.n_exp),
+                "cohesion_pa": float(soil.cohesion_pa),
+                "friction_angle_rad": float(soil.friction_angle_rad),
+                "unit_weight_n_m3": self.soil_unit_weight_n_m3}
+
     # The C law's name for the class's force law (`kernel_constants`, ``_laws.h``).
     _COMPILED_KIND: int | None = None
 
@@ -182,7 +294,8 @@ class _PatchModel(ABC):
         gamma, exponent = self._compaction(soil)
         return KernelConstants(self._COMPILED_KIND, ac, tan_phi, ratio,
                                self.lateral_stiffness_ratio, 0.0, 0.0, 0.0, 0.0, 0.0, False,
-                               False, 0.0, 0.0, self.rolling_resistance_coeff, gamma, exponent)
+                               False, 0.0, 0.0, self.rolling_resistance_coeff, gamma, exponent,
+                               **self._slip_sinkage_constants(soil))
 
     def scalar_kernel(self, soil: SoilParams) -> Kernel:
         """The per-wheel float function ``(slip, tan_beta, load_n) -> (fx, fy, resistance)``.
@@ -201,11 +314,20 @@ class _PatchModel(ABC):
         gamma, exponent = self._compaction(soil)
         forces, f_r = self._forces(soil), self.rolling_resistance_coeff
         resistance = _laws.motion_resistance_n
+        sink = KernelConstants(0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False,
+                               0.0, 0.0, 0.0, 0.0, 1.0, **self._slip_sinkage_constants(soil))
+        if not sink.slip_sinkage:
+            def kernel(slip: float, tan_beta: float,
+                       load_n: float) -> tuple[float, float, float]:
+                fx, fy = forces(slip, tan_beta, load_n)
+                return fx, fy, resistance(load_n, f_r, gamma, exponent)
+            return kernel
 
-        def kernel(slip: float, tan_beta: float, load_n: float) -> tuple[float, float, float]:
+        def sinking(slip: float, tan_beta: float, load_n: float) -> tuple[float, float, float]:
             fx, fy = forces(slip, tan_beta, load_n)
-            return fx, fy, resistance(load_n, f_r, gamma, exponent)
-        return kernel
+            res = resistance(load_n, f_r, gamma, exponent)
+            return fx, fy, res + slip_sinkage_resistance(slip, load_n, sink)
+        return sinking
 
     def __call__(self, slip: np.ndarray, tan_beta: np.ndarray, load_n: np.ndarray,
                  soil: SoilParams) -> tuple[np.ndarray, np.ndarray]:
@@ -246,6 +368,9 @@ class _PatchModel(ABC):
     def __repr__(self) -> str:
         aniso = (f", lateral_stiffness_ratio={self.lateral_stiffness_ratio!r}"
                  if self.lateral_stiffness_ratio != 1.0 else "")
+        if self.slip_sinkage is not None:
+            aniso += (f", slip_sinkage={self.slip_sinkage!r}, "
+                      f"soil_unit_weight_n_m3={self.soil_unit_weight_n_m3!r}")
         return (f"{type(self).__name__}({self.geometry!r}, "
                 f"rolling_resistance_coeff={self.rolling_resistance_coeff!r}{aniso})")
 
@@ -265,6 +390,14 @@ class JanosiForceModel(_PatchModel):
     friction ellipse (Eq. 11), and pure longitudinal slip reduces exactly to Okello's curve.
     L is the shear length (`ContactGeometry.shear_length_m`). No contact (W <= 0), no force.
 
+    Slip angle: the sliding-velocity convention (``slip_angle_convention = "sliding"``). The
+    shear displacement of Lindgren Eq. 2 at x along the patch is the sliding velocity
+    (r omega - v, v_lat) times the time x/(r omega) the rim point has been in contact (Wong,
+    Theory of Ground Vehicles, Ch. 5: j = i x), so the law's (s, tan_beta) is that velocity
+    over r omega in drive: tan_beta = v_lat/(r omega) = (1 - s) v_lat/v_x, and the split by
+    direction is along the sliding velocity. Reina's tan(beta) = v_lat/v_x (Reina Eq. 4) would
+    overstate the lateral displacement by 1/(1 - s).
+
     Parameters
     ----------
     geometry : ContactGeometry
@@ -277,6 +410,18 @@ class JanosiForceModel(_PatchModel):
         kappa [-], > 0: the soil's lateral small-slip stiffness over its longitudinal one
         (`janosi.janosi_forces`, lateral anisotropy; Reina measured C_y/C_x = 3.6 on loose
         soil, Reina Table 3). Default 1, isotropic: no slipenv soil has a measured value.
+    slip_sinkage : None | "bulldozing" | "full"
+        Resistance added by slip (`slip_sinkage_resistance`, `SLIP_SINKAGE_MODES`): None
+        (default) the resistance at the static sinkage only; ``"bulldozing"`` the soil a
+        slipping or skidding wheel digs out below its static rut (Lyasko's slip sinkage) is
+        bulldozed ahead of its front (Bekker); ``"full"`` also the Bekker compaction at the
+        slip sinkage. Rigid wheels only (a track's contact raises ValueError). Off by default,
+        as measured: with ``"bulldozing"`` the rover and the Husky dig in and stall on 10 deg
+        loose slopes they climb without it at slip 0.3-0.6 (a step to full speed, slip
+        0.7-0.8 for 0.1 s, digs them in on the flat too); ``"full"`` stalls every wheeled
+        vehicle on the flat (Lyasko's compaction grows with slip faster than the traction).
+    soil_unit_weight_n_m3 : float
+        gamma_s [N/m^3] >= 0 of the bulldozing term; default `DEFAULT_UNIT_WEIGHT_N_M3`.
     """
 
     _COMPILED_KIND = 0
@@ -336,21 +481,33 @@ class ReinaForceModel(_PatchModel):
         i.e. mu raised to mu + R_c/W), so that thrust minus R_c gives back the measured net
         curve at high slip and -R_c (a freely rolling wheel cutting a rut) at zero slip.
         The lateral force stays Eq. 6-9.
+    slip_sinkage, soil_unit_weight_n_m3
+        As in `JanosiForceModel`. Reina's curve is a measured net force, which holds the
+        slip sinkage over the slips it was measured at; the option adds it again there, and
+        is meant for the slips beyond (a wheel spinning or locked on a slope).
 
     Notes
     -----
     Evaluated as fx = s k_x(sigma), fy = -tan_beta k_y(sigma) (see `reina`), k floored at 0.
+    Its slip angle is Reina's, tan_beta = v_lat/v_x (Reina Eq. 4; ``slip_angle_convention =
+    "reina"``), the convention Table 3 was fitted in; the simulation relaxes the lateral slip
+    state to it (`slip_dynamics.relax_slip` with ``forward_reference``), so in drive the law
+    is not fed the sliding-velocity tan_beta = (1 - s) v_lat/v_x of the shear laws.
     With scaling, F = W F_1(s, tan_beta), F_1 Reina's law at unit load with C/W_ref. Zero
     load gives zero force either way.
     """
 
     def __init__(self, geometry: ContactGeometry, rolling_resistance_coeff: float = 0.01,
-                 scale_stiffness_with_load: bool = True, compaction: bool = False) -> None:
-        super().__init__(geometry, rolling_resistance_coeff)
+                 scale_stiffness_with_load: bool = True, compaction: bool = False,
+                 slip_sinkage: str | None = None,
+                 soil_unit_weight_n_m3: float = DEFAULT_UNIT_WEIGHT_N_M3) -> None:
+        super().__init__(geometry, rolling_resistance_coeff, slip_sinkage=slip_sinkage,
+                         soil_unit_weight_n_m3=soil_unit_weight_n_m3)
         self.scale_stiffness_with_load = bool(scale_stiffness_with_load)
         self.compaction = bool(compaction)
 
     _COMPILED_KIND = 2
+    slip_angle_convention = "reina"
 
     def _reina_constants(self, soil: SoilParams) -> tuple[float, float, float, float, float]:
         """(mu, C_x, C_y, A_x, A_y) of Eq. 5-9 as the law uses them: with load scaling,
@@ -372,7 +529,8 @@ class ReinaForceModel(_PatchModel):
         return KernelConstants(self._COMPILED_KIND, 0.0, 0.0, 0.0, 1.0, mu, c_x, c_y, a_x, a_y,
                                scaled, self.compaction, float(soil.c_x_n),
                                float(soil.reference_load_n) if scaled else 0.0,
-                               self.rolling_resistance_coeff, gamma, exponent)
+                               self.rolling_resistance_coeff, gamma, exponent,
+                               **self._slip_sinkage_constants(soil))
 
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
         mu, c_x, c_y, a_x, a_y = self._reina_constants(soil)

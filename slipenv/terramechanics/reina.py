@@ -35,7 +35,6 @@ __all__ = [
     "reina_reference_force_n",
     "reina_forces_n",
     "reina_max_longitudinal_force_n",
-    "slip_ratio_from_slip_angle",
 ]
 
 
@@ -92,7 +91,9 @@ def reina_forces(slip: float, tan_beta: float, load_n: float, mu: float, c_x_n: 
     slip : float
         Slip ratio s [-] (Reina Eq. 3; > 0 in drive).
     tan_beta : float
-        Tangent of the slip angle, v_lateral/|v_longitudinal| [-] (Reina Eq. 4).
+        Tangent of the slip angle, v_lateral/|v_longitudinal| [-] (Reina Eq. 4), the
+        convention Table 3 was fitted in; the simulation's lateral slip state relaxes to it
+        for this law (`slip_dynamics.relax_slip` with ``forward_reference``).
     load_n : float
         Vertical load W [N]; W <= 0 (no contact) gives no force.
     mu, c_x_n, c_y_n, a_x, a_y : float
@@ -116,24 +117,3 @@ def reina_max_longitudinal_force_n(tan_beta: ArrayLike, load_n: ArrayLike,
                                    mu: ArrayLike) -> np.ndarray:
     """Saturation of F_x as s -> 1, mu W / sqrt(1 + tan^2 beta) [N] (Reina Eq. 10, A_x ~ 0)."""
     return np.asarray(mu) * np.asarray(load_n) / np.hypot(1.0, tan_beta)
-
-
-def slip_ratio_from_slip_angle(beta_rad: ArrayLike, s_x0: ArrayLike, beta0_rad: ArrayLike,
-                               slope_per_rad: ArrayLike) -> np.ndarray:
-    """Longitudinal slip needed at slip angle beta for a fixed tractive effort (Reina Eq. 12).
-
-    s_x = s_x0 for beta <= beta0, s_x0 + k (beta - beta0) above.
-
-    Parameters
-    ----------
-    beta_rad : array_like
-        Slip angle beta [rad].
-    s_x0 : array_like
-        Slip ratio without lateral drift [-].
-    beta0_rad : array_like
-        Slip angle where the slip ratio starts to rise [rad].
-    slope_per_rad : array_like
-        k [1/rad].
-    """
-    excess = np.maximum(np.asarray(beta_rad, dtype=float) - beta0_rad, 0.0)
-    return np.asarray(s_x0) + np.asarray(slope_per_rad) * excess

@@ -1,22 +1,40 @@
 """Slip as a state: relaxation length and step, soil dampers, and the rut (Coulomb) resistance.
 
-Float functions of one wheel (convention of `contact`: s > 0 drives, tan_beta = v_lat/|v_long|,
-forces in the wheel's heading frame). Each law is written once, in C
+Float functions of one wheel (convention of `contact`: s > 0 drives, tan_beta in the force law's
+slip-angle convention (below), forces in the wheel's heading frame). Each law is written once, in C
 (``slipenv/terramechanics/_laws.h``), the text the simulation's substep loop runs; the functions
 here call it, and their docstrings give the sources and the equations.
 
 Relaxation (Pacejka, Tyre and Vehicle Dynamics, 3rd ed., §7.2.1). The slip ratio and the slip
 angle are states with a relaxation length sigma [m],
 
-    sigma ds/dt + V s = r omega - v,      sigma db/dt + V b = v_lat,
+    sigma ds/dt + V s = r omega - v,      sigma db/dt + V_b b = v_lat,
     V = max(|r omega|, |v|, |v_lat|),
 
-whose steady state is the kinematic slip (`contact.slip_ratio`, and v_lat/|v| at ordinary
-slip). One reference speed V for both components keeps (s, tan_beta) along the contact point's
-sliding velocity (r omega - v, v_lat) even at large slip, which the combined-slip laws split the
-resultant by. At standstill V = 0 and the state integrates the slip displacement, so a parked
-vehicle is held by a soil "spring" (the Janosi shear deformation) instead of creeping, and a
-wheel spinning at v = 0 reaches s = 1 with no division by zero. `relax_slip` takes one backward
+whose steady state is the kinematic slip (`contact.slip_ratio`). The lateral state's reference
+speed V_b is the force law's slip-angle convention:
+
+* the sliding velocity (Janosi, linear laws): V_b = V, so b -> v_lat/V. One reference speed for
+  both components keeps (s, tan_beta) along the contact point's sliding velocity
+  (r omega - v, v_lat) even at large slip, which the isotropic shear laws split the resultant
+  by: the Janosi shear displacement at x along the patch is that velocity times the time
+  x/(r omega) the rim point has been in contact (Lindgren Eq. 2; Wong, Theory of Ground
+  Vehicles, Ch. 5, j = i x), so in drive tan_beta = v_lat/(r omega) = (1 - s) v_lat/v.
+* Reina's (`relax_slip(..., forward_reference=True)`, `ReinaForceModel`):
+  V_b = max(|v|, |v_lat|), so b -> v_lat/|v|, Reina's tan(beta) = V_y/V_x (Reina Eq. 4, the
+  convention Table 3 was fitted in), up to 45 deg and +-1 beyond. This is Pacejka's own lateral
+  relaxation (leak |V_cx|, steady tan(alpha) = V_sy/|V_cx|, §7.2.1) with |v_lat| added to the
+  leak: with |V_cx| alone, at v -> 0 the state has no leak and a wheel sliding purely sideways
+  would wind it up to the clip; with |v_lat| it settles smoothly at the same saturation as the
+  sliding convention (tan_beta = +-1, where the clip also sits). The state is what the law
+  reads: nothing divides by v, so v -> 0 is harmless (below).
+
+At standstill V = V_b = 0 and the state integrates the slip displacement, so a parked vehicle
+is held by a soil "spring" (the Janosi shear deformation) instead of creeping; a wheel spinning
+at v = 0 reaches s = 1 with no division by zero (its lateral state, in Reina's convention, holds
+whatever lateral deformation it had, a spring the side damper damps); pure sideways motion
+drives tan_beta to +-1 against the motion. The soil spring is passive at any V_b >= 0: its
+force opposes b and the leak V_b b only removes deformation. `relax_slip` takes one backward
 Euler step, unconditionally stable for this linear ODE, which keeps a light wheel smooth even
 when its spin time constant falls below the time step.
 
@@ -67,10 +85,11 @@ __all__ = [
 
 
 def relax_slip(slip: float, tan_beta: float, rim_speed_mps: float, long_speed_mps: float,
-               lat_speed_mps: float, step_per_length: float) -> tuple[float, float, float]:
+               lat_speed_mps: float, step_per_length: float, forward_reference: bool = False
+               ) -> tuple[float, float, float, float]:
     """One backward-Euler step of the slip relaxation ODE (Pacejka §7.2.1; module docstring).
 
-    With h = dt/sigma: s' = (s + h (r omega - v))/(1 + h V), b' = (b + h v_lat)/(1 + h V),
+    With h = dt/sigma: s' = (s + h (r omega - v))/(1 + h V), b' = (b + h v_lat)/(1 + h V_b),
     each clipped to [-1, 1] (full slip either way, as `contact.slip_ratio`).
 
     Parameters
@@ -83,16 +102,22 @@ def relax_slip(slip: float, tan_beta: float, rim_speed_mps: float, long_speed_mp
         v, v_lat [m/s]: the contact point's velocity along the wheel's heading and to its left.
     step_per_length : float
         h = dt/sigma [s/m]: time step over relaxation length.
+    forward_reference : bool
+        False (Janosi, linear laws): V_b = V, tan_beta relaxes to v_lat/V, along the sliding
+        velocity. True (Reina's law): V_b = max(|v|, |v_lat|), tan_beta relaxes to v_lat/|v|
+        (Reina Eq. 4) up to 45 deg and to +-1 beyond.
 
     Returns
     -------
     slip, tan_beta : float
         The state at the end of the step.
     reference_speed_mps : float
-        V = max(|r omega|, |v|, |v_lat|) [m/s], the speed the dampers fade with.
+        V = max(|r omega|, |v|, |v_lat|) [m/s], the speed the lengthwise damper fades with.
+    lateral_reference_speed_mps : float
+        V_b [m/s], the leak speed of tan_beta, the speed the side damper fades with.
     """
     return _laws.relax_slip(slip, tan_beta, rim_speed_mps, long_speed_mps, lat_speed_mps,
-                            step_per_length)
+                            step_per_length, forward_reference)
 
 
 def critical_damping_ns_per_m(slip_stiffness_n: float, relaxation_m: float, mass_kg: float,
@@ -125,11 +150,11 @@ def lateral_soil_damping_n(tan_beta_change: float, reference_speed_mps: float,
                            damping_n: float, fade_speed_mps: float) -> float:
     """Side damper on the lateral shear-deformation rate, faded with speed [N].
 
-    F = -d delta(tan_beta)/(1 + (V/v_f)^4), with d = c sigma/dt [N per unit change of the state
+    F = -d delta(tan_beta)/(1 + (V_b/v_f)^4), with d = c sigma/dt [N per unit change of the state
     in one step] so that d delta(tan_beta) = c sigma d(tan_beta)/dt: LuGre's sigma_1 term on
     the deformation rate (Canudas de Wit et al. 1995). Zero in steady side slip (the state does
     not change), about full at crawling speed, where a turning tracked vehicle otherwise rocks at
-    several Hz, and faded out (1/(1 + (V/v_f)^4)) where the relaxation leak V/sigma already
+    several Hz, and faded out (1/(1 + (V_b/v_f)^4)) where the relaxation leak V_b/sigma already
     damps the spring (Canudas de Wit et al. 2003 fade sigma_1 with speed too).
 
     Parameters
@@ -137,7 +162,7 @@ def lateral_soil_damping_n(tan_beta_change: float, reference_speed_mps: float,
     tan_beta_change : float
         Change of the tan_beta state over the step [-].
     reference_speed_mps : float
-        V [m/s] (from `relax_slip`).
+        V_b [m/s], the lateral state's leak speed (from `relax_slip`).
     damping_n : float
         d [N per unit tan_beta change per step], >= 0.
     fade_speed_mps : float

@@ -13,11 +13,14 @@ Imposed kinematics (Reina Eq. 3-4, driving): the carriage moves along world +x a
 heads at yaw -beta, so its contact point slides to its left at v_lat = V sin(beta) and forward
 at v_x = V cos(beta), tan(beta) = v_lat/v_x; the wheel spins at omega = v_x/(r (1 - s)).
 
-What the simulation feeds the force law: its slip states relax to s and v_lat/V with
-V = max(r omega, v_x, |v_lat|) (`slipenv.terramechanics.slip_dynamics`), i.e. in drive to
-tan(beta) (1 - s), not Reina's tan(beta) = v_lat/v_x (Eq. 4). The bed therefore records both
-the imposed (geometric) slip angle and the state the law saw (`Trial.law_tan_beta`); at
-s = 0.6, beta = 10 deg the simulated wheel develops 41 % of the lateral force of Reina's law.
+What the simulation feeds the force law: its slip states relax to s (Eq. 3) and to the law's
+own slip angle (`slipenv.terramechanics.slip_dynamics`, `models.slip_angle_convention`): for
+Reina's law tan(beta) = v_lat/v_x (Eq. 4), so at steady state the carriage forces are Reina's
+law at the imposed (s, beta); for the Janosi and linear laws tan(beta) = v_lat/max(r omega, v_x),
+the direction of the sliding velocity, i.e. (1 - s) tan(beta) in drive. The bed records both the
+imposed slip angle and the state the law saw (`Trial.law_tan_beta`). A trial can also be run in
+the sliding-velocity convention (``convention="simulation"``): the imposed tan(beta) is then
+v_lat/(r omega), which probes the shear laws at exactly (s, beta).
 """
 
 from __future__ import annotations
@@ -99,7 +102,8 @@ class Trial:
 
     @property
     def law_slip_angle_deg(self) -> float:
-        """The slip angle the simulated soil's force law was evaluated at [deg] (see module)."""
+        """The slip angle the simulated soil's force law was evaluated at [deg], in the law's
+        convention (see module)."""
         return math.degrees(math.atan(self.law_tan_beta))
 
 
@@ -196,9 +200,10 @@ class VirtualTestBed:
             Time to reach steady state, then time averaged over [s]. At 5 cm/s 5 s is about
             seven slip relaxation lengths (the contact arc, 3.6 cm on the bed's wheel).
         convention : str
-            ``"reina"``: tan(beta) = v_lat/v_x (Reina Eq. 4, the real rig). ``"simulation"``:
-            tan(beta) = v_lat/max(r omega, v_x), the slip state slipenv's simulation feeds
-            its force laws (module docstring), so the law is probed at exactly (s, beta).
+            ``"reina"``: tan(beta) = v_lat/v_x (Reina Eq. 4, the real rig, and the slip angle
+            Reina's law takes). ``"simulation"``: tan(beta) = v_lat/max(r omega, v_x), the
+            sliding-velocity slip angle the Janosi and linear laws take (module docstring),
+            so those laws are probed at exactly (s, beta).
         """
         if not (0.0 <= slip_ratio < 1.0):
             raise ValueError(f"slip_ratio={slip_ratio!r} must be in [0, 1) (driving)")

@@ -4,7 +4,8 @@ Registered by :mod:`slipenv.cli` with ``add_parser(sub)``; ``main(args)`` return
 DIR holds ``trials.csv`` and ``meta.json`` (format: `slipenv.testbed.csv_format`). Bad input
 raises `ValueError` naming the file, row and column (exit code 2, one line on stderr).
 
-The written soil loads with one line::
+The written soil loads with one line (present only when the fit is accepted; a rejected fit's
+soil is under ``rejected_soil``, with ``"accepted": false`` and the reasons in ``warnings``)::
 
     soil = Soil(**json.load(open(PATH))["soil"])   # from slipenv.terramechanics.soil
     env = gymnasium.make("slipenv/Configurable-v0", soil=soil, force_model=report["best"])
@@ -38,6 +39,7 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 
 def main(args: argparse.Namespace) -> int:
     """Run ``slipenv fit-soil``; 0 on success (bad input raises ValueError: exit 2)."""
+    from slipenv.cli_outputs import output_dir, output_file, partial_results
     from slipenv.terramechanics.presets import soil_by_name
     from slipenv.testbed.csv_format import read_testbed
     from slipenv.testbed.report import analyse, plot_fits
@@ -45,18 +47,18 @@ def main(args: argparse.Namespace) -> int:
     if args.folds < 2:
         raise ValueError(f"--folds={args.folds} must be >= 2")
     base = soil_by_name(args.base_soil)
-    json_path = pathlib.Path(args.json_path)
-    if json_path.is_dir():
-        raise ValueError(f"--json {json_path} is a directory")
+    json_path = output_file(args.json_path, "--json")
+    if args.report_dir:
+        output_dir(args.report_dir, "--report")
     data = read_testbed(args.directory)
     report, fits = analyse(data, base, folds=args.folds, seed=args.seed)
     report["source"] = str(pathlib.Path(args.directory))
-    if args.report_dir:
-        plots = plot_fits(data, fits, report["best"], args.report_dir)
-        report["plots"] = [str(x) for x in plots]
-        (pathlib.Path(args.report_dir) / "report.md").write_text(_markdown(report))
-    json_path.parent.mkdir(parents=True, exist_ok=True)
-    json_path.write_text(json.dumps(report, indent=2) + "\n")
+    with partial_results(args.report_dir):
+        if args.report_dir:
+            plots = plot_fits(data, fits, report["best"], args.report_dir)
+            report["plots"] = [str(x) for x in plots]
+            (pathlib.Path(args.report_dir) / "report.md").write_text(_markdown(report))
+        json_path.write_text(json.dumps(report, indent=2) + "\n")
     print(_markdown(report), end="")
     return 0
 
@@ -65,11 +67,19 @@ def _markdown(report: dict) -> str:
     lines = [f"fit-soil: {report['n_trials']} trials, {report['folds']}-fold held out",
              "", "| law | held-out RMSE F_x [N] | F_y [N] | parameters (value ± SE) |",
              "|---|---|---|---|"]
+    from slipenv.testbed.report import format_parameter
+
     for law, entry in report["laws"].items():
-        params = ", ".join(f"{k} = {v:.4g} ± {e:.2g}" for k, (v, e) in
-                           entry["parameters"].items())
+        status = entry.get("parameter_status", {})
+        params = ", ".join(f"{k} = {format_parameter(v, e, status.get(k, ''), k)}"
+                           for k, (v, e) in entry["parameters"].items())
         r = entry["heldout_rmse_n"]
         mark = " (best)" if law == report["best"] else ""
         lines.append(f"| {law}{mark} | {r['fx']:.3g} | {r['fy']:.3g} | {params} |")
     lines += ["", f"verdict: {report['verdict']}"]
+    if report.get("sidewall_offered"):
+        lines.append(f"side-wall law offered: {report['sidewall_reason']}")
+    lines.append("soil: accepted (written under 'soil')" if report.get("accepted") else
+                 "soil: NOT accepted (written under 'rejected_soil' only)")
+    lines += [f"warning: {w}" for w in report.get("warnings", [])]
     return "\n".join(lines) + "\n"

@@ -19,7 +19,12 @@ fx_std_n, fy_std_n no        standard deviation of fx_n, fy_n within the trial [
 
 ``meta.json``: ``{"wheel_radius_m": r, "wheel_width_m": b, "contact_length_m": L (optional,
 default r/2), "slip_angle_definition": "reina" (Eq. 4, default) | "simulation", "notes": ...}``
-and a ``"sign_conventions"`` text the writer fills in. A bad file raises `ValueError` naming the
+and a ``"sign_conventions"`` text the writer fills in. ``slip_angle_definition`` says what
+``slip_angle_deg`` measures: ``"reina"``, tan beta = v_lat/v_x (Reina Eq. 4, a real rig's
+geometric angle); ``"simulation"``, tan beta = v_lat/max(|r omega|, |v_x|), the direction of
+the contact point's sliding velocity (in drive (1 - s) times Reina's), below 45 deg. fit-soil
+converts each trial to the slip state the simulation feeds each law
+(`slipenv.testbed.fit.convert_slip_state`). A bad file raises `ValueError` naming the
 file, the row (1 = first data row) and the column; so does a value no test bed measures (a
 force or load beyond 1e6 N, sinkage beyond 4 m, a wheel size beyond 2 m: a unit mistake or a
 corrupted cell).

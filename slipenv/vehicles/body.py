@@ -25,6 +25,8 @@ from slipenv.vehicles.spec import VehicleSpec
 p = import_pybullet()  # the banner-free first import (see slipenv.pybullet_quiet)
 
 _CYLINDER_ALONG_Y = (math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4))
+# The pivoting axle beam, as light as the steering links: its wheels carry the mass.
+_PIVOT_AXLE_MASS_KG = 0.05
 
 
 @dataclass
@@ -46,6 +48,10 @@ class VehicleBody:
         contact lines) in the base frame [m].
     contact_radius_m : float
         Collision radius of the driven wheels: height of the wheel centres above the ground [m].
+    pivot_joint : int | None
+        The passive roll joint of ``spec.pivot_axle`` (``None`` without one). Its link comes
+        before the wheels it carries, so their link indices are one higher than without it:
+        always take them from ``wheel_links``.
     """
 
     body_id: int
@@ -54,6 +60,7 @@ class VehicleBody:
     steer_joints: list[int | None]
     base_to_reference_m: tuple[float, float, float]
     contact_radius_m: float
+    pivot_joint: int | None = None
 
 
 def build_vehicle(
@@ -84,7 +91,24 @@ def build_vehicle(
     for joint in body.spin_joints + body.steer_joints:
         if joint is not None:
             p.changeDynamics(body.body_id, joint, jointDamping=0.0, physicsClientId=client)
+    if body.pivot_joint is not None and spec.pivot_axle is not None:
+        _make_passive(body.body_id, body.pivot_joint, spec.pivot_axle.limit_rad,
+                      spec.pivot_axle.damping_nms, client)
     return body
+
+
+def _make_passive(body_id: int, joint: int, limit_rad: float, damping_nms: float,
+                  client: int) -> None:
+    """A free revolute joint: no motor, optional viscous damping, symmetric stops.
+
+    PyBullet puts a velocity motor on every revolute joint it creates (target 0, which holds
+    the joint like a brake); a zero force limit removes it, so the contact loads alone set
+    the pivot angle.
+    """
+    p.setJointMotorControl2(body_id, joint, p.VELOCITY_CONTROL, targetVelocity=0.0, force=0.0,
+                            physicsClientId=client)
+    p.changeDynamics(body_id, joint, jointDamping=damping_nms, jointLowerLimit=-limit_rad,
+                     jointUpperLimit=limit_rad, physicsClientId=client)
 
 
 def sphere_wheel_urdf(spec: VehicleSpec) -> str:
@@ -180,6 +204,23 @@ def _create_multibody(
     spin_joints: list[int | None] = []
     steer_joints: list[int | None] = []
     h = spec.chassis_center_height_m
+    pivot = spec.pivot_origin_m()
+    pivot_joint = None
+    if pivot is not None:
+        # The axle beam: a light link on a revolute joint along the chassis x axis; a link's
+        # parent must precede it, so it is link 0 and carries the axle's wheels.
+        half_span = max(abs(w.position_m[1]) for w in spec.wheels)
+        masses.append(_PIVOT_AXLE_MASS_KG)
+        cols.append(-1)
+        viss.append(p.createVisualShape(
+            p.GEOM_BOX, halfExtents=[0.02, half_span, 0.015], rgbaColor=[0.4, 0.4, 0.45, 1],
+            physicsClientId=client))
+        poss.append([pivot[0], pivot[1], pivot[2] - h])
+        parents.append(0)
+        types.append(p.JOINT_REVOLUTE)
+        axes.append([1, 0, 0])
+        pivot_joint = 0
+    on_axle = set(spec.pivot_axle.wheels) if spec.pivot_axle is not None else set()
     for wheel in spec.wheels:
         x, y, z = wheel.position_m
         col = p.createCollisionShape(p.GEOM_SPHERE, radius=wheel.radius_m, physicsClientId=client)
@@ -190,12 +231,15 @@ def _create_multibody(
         )
         parent = 0
         offset = [x, y, z - h]
+        if wheel.name in on_axle and pivot is not None and pivot_joint is not None:
+            parent = pivot_joint + 1  # createMultiBody's parents: 0 the base, i + 1 link i
+            offset = [x - pivot[0], y - pivot[1], z - pivot[2]]
         if wheel.steered:
             masses.append(0.05)
             cols.append(-1)
             viss.append(-1)
             poss.append(offset)
-            parents.append(0)
+            parents.append(parent)
             types.append(p.JOINT_REVOLUTE)
             axes.append([0, 0, 1])
             steer_joints.append(len(masses) - 1)
@@ -240,4 +284,4 @@ def _create_multibody(
     ref = tuple(sum(w.position_m[i] for w in driven) / len(driven) for i in range(3))
     return VehicleBody(body_id, wheel_links, spin_joints, steer_joints,
                        (ref[0], ref[1], ref[2] - h),
-                       sum(w.radius_m for w in driven) / len(driven))
+                       sum(w.radius_m for w in driven) / len(driven), pivot_joint)

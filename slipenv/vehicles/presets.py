@@ -9,7 +9,7 @@ import dataclasses
 import math
 from collections.abc import Callable
 
-from slipenv.vehicles.spec import VehicleSpec, WheelSpec
+from slipenv.vehicles.spec import PivotAxleSpec, VehicleSpec, WheelSpec
 
 
 def farm_2wd() -> VehicleSpec:
@@ -114,11 +114,18 @@ def tracked_patako_wong_chiang() -> VehicleSpec:
                                name="tracked_patako_wong_chiang")
 
 
-def rover_4ws() -> VehicleSpec:
+def rover_4ws(rocker: bool = True) -> VehicleSpec:
     """Reina's El-Dorado-like 4WD/4WS rover: about 6.6 kg load per wheel (Reina §3).
 
     Wheel radius, wheelbase and track are not given for El-Dorado and are assumed for a ~0.6 m
     rover with 0.18 m wheels (inside the 5-25 cm range of Reina's single-wheel test bed).
+
+    Reina §1: El-Dorado features "a rocker-type suspension system". Neither the paper nor the
+    sources we could find give its layout or dimensions, so it is modelled as the simplest
+    passive suspension that gives a four-wheeled vehicle the same property (one roll freedom
+    between the axles: all four wheels stay loaded on uneven ground): a front axle pivoting
+    freely about the chassis's longitudinal axis at the wheel-centre height, with ±15° stops.
+    ``rocker=False`` gives the rigid chassis (all four wheel mounts on one body).
     """
     r, half_l, half_w = 0.09, 0.30, 0.25
     wheels = tuple(
@@ -146,7 +153,17 @@ def rover_4ws() -> VehicleSpec:
         max_yaw_rate_rad_s=0.6,
         counts_per_rad=285.0,
         wheelbase_m=2 * half_l,
-        assumed=("wheel radius", "wheelbase_m", "track_width_m", "max_wheel_torque_nm"),
+        # Assumed (docstring): a pivoting front axle standing in for El-Dorado's unpublished
+        # rocker layout; pivot at the wheel-centre height, ±15° stops, no damping.
+        pivot_axle=PivotAxleSpec(("front_left", "front_right"), height_m=0.0,
+                                 limit_rad=math.radians(15.0), damping_nms=0.0)
+        if rocker else None,
+        assumed=("wheel radius", "wheelbase_m", "track_width_m", "max_wheel_torque_nm",
+                 *(("pivot_axle: El-Dorado's rocker-type suspension (Reina §1) as a front axle "
+                    "pivoting about the longitudinal axis (layout unpublished)",
+                    "pivot_axle.height_m = 0 (wheel-centre height)",
+                    "pivot_axle.limit_rad = 15°", "pivot_axle.damping_nms = 0")
+                   if rocker else ())),
     )
 
 

@@ -37,6 +37,9 @@ BOUNDS: dict[str, tuple[float, float]] = {
     "max_yaw_rate_rad_s": (1e-3, 20.0),
     "counts_per_rad": (1e-3, 1e7),
     "contact_sinkage_m": (1e-6, 0.5),
+    "pivot_height_m": (-2.0, 2.0),  # roll axis above the wheel-centre plane
+    "pivot_limit_rad": (1e-3, math.pi / 2),
+    "pivot_damping_nms": (0.0, 1e5),  # [N m s/rad]
 }
 
 
@@ -136,6 +139,45 @@ class WheelSpec:
 
 
 @dataclass(frozen=True)
+class PivotAxleSpec:
+    """A passive axle that pivots about the chassis's longitudinal axis (a rocker suspension).
+
+    The wheels it carries hang from one revolute joint whose axis runs along the chassis x axis
+    through the axle's midpoint: the joint transmits no roll moment, so a four-wheeled vehicle
+    with one pivoting axle is statically determinate and keeps all four wheels loaded on
+    uneven ground: the pivoting front axle of farm tractors, and the passive roll freedom of
+    the rocker-type suspensions of four-wheeled rovers (Thueer, Krebs & Siegwart 2006 compare
+    such passive suspensions).
+
+    Attributes
+    ----------
+    wheels : tuple[str, ...]
+        Names of the wheels on the axle (at least two, one each side, same x).
+    height_m : float
+        Height of the pivot axis above the wheel-centre plane, in the chassis frame [m].
+    limit_rad : float
+        Symmetric stop of the pivot angle, ``|angle| <= limit_rad`` [rad].
+    damping_nms : float
+        Viscous damping of the pivot [N m s/rad] (0: a free pivot).
+    """
+
+    wheels: tuple[str, ...]
+    height_m: float = 0.0
+    limit_rad: float = math.radians(15.0)
+    damping_nms: float = 0.0
+
+    def __post_init__(self) -> None:
+        owner = "PivotAxleSpec"
+        if (not isinstance(self.wheels, tuple) or len(self.wheels) < 2
+                or not all(isinstance(w, str) and w for w in self.wheels)):
+            raise ValueError(f"{owner}.wheels must be a tuple of at least two wheel names, "
+                             f"got {self.wheels!r}")
+        _check_range(owner, "height_m", self.height_m, "pivot_height_m")
+        _check_range(owner, "limit_rad", self.limit_rad, "pivot_limit_rad")
+        _check_range(owner, "damping_nms", self.damping_nms, "pivot_damping_nms")
+
+
+@dataclass(frozen=True)
 class VehicleSpec:
     """A whole vehicle.
 
@@ -189,8 +231,12 @@ class VehicleSpec:
         shear field along each track, with sinkage, rut and side-wall resistance,
         ``slipenv.terramechanics.track`` and ``slipenv.sim.track_soil``); needs
         ``track_length_m`` and a ``skid_steer`` vehicle.
+    pivot_axle : PivotAxleSpec | None
+        A passive axle pivoting about the longitudinal axis (rocker suspension); ``None``: the
+        chassis and all wheel mounts form one rigid body.
     assumed : tuple[str, ...]
-        Fields whose values the source paper leaves out and that are assumed here.
+        Fields whose values the source paper leaves out and that are assumed here (non-empty
+        strings).
 
     Notes
     -----
@@ -219,6 +265,7 @@ class VehicleSpec:
     track_length_m: float | None = None
     contact_sinkage_m: float = 0.001
     track_model: str = "per_wheel"
+    pivot_axle: PivotAxleSpec | None = None
     assumed: tuple[str, ...] = field(default_factory=tuple)
 
     def __post_init__(self) -> None:
@@ -275,6 +322,40 @@ class VehicleSpec:
                              "with track_length_m")
         if self.urdf is not None and len(self.urdf_wheel_joints) != len(self.wheels):
             raise ValueError(f"{owner}: urdf_wheel_joints must name one joint per wheel")
+        if (not isinstance(self.assumed, tuple)
+                or not all(isinstance(a, str) and a.strip() for a in self.assumed)):
+            raise ValueError(f"{owner}.assumed must be a tuple of non-empty strings, "
+                             f"got {self.assumed!r}")
+        if self.pivot_axle is not None:
+            self._check_pivot_axle(owner, self.pivot_axle)
+
+    def _check_pivot_axle(self, owner: str, axle: PivotAxleSpec) -> None:
+        if self.urdf is not None:
+            raise ValueError(f"{owner}.pivot_axle needs a body built from the spec, not a URDF")
+        by_name = {w.name: w for w in self.wheels}
+        unknown = [n for n in axle.wheels if n not in by_name]
+        if unknown or len(set(axle.wheels)) != len(axle.wheels):
+            raise ValueError(f"{owner}.pivot_axle.wheels must name distinct wheels of the "
+                             f"vehicle, got {axle.wheels}; wheels are {tuple(by_name)}")
+        on_axle = [by_name[n] for n in axle.wheels]
+        xs = [w.position_m[0] for w in on_axle]
+        if max(xs) - min(xs) > 1e-9:
+            raise ValueError(f"{owner}.pivot_axle wheels must share one axle (one x), got {xs}")
+        ys = [w.position_m[1] for w in on_axle]
+        if not (min(ys) < 0.0 < max(ys)):
+            raise ValueError(f"{owner}.pivot_axle needs a wheel on each side, got y = {ys}")
+        if len(on_axle) == len(self.wheels):
+            raise ValueError(f"{owner}.pivot_axle cannot carry every wheel: the chassis would "
+                             "roll freely about it")
+
+    def pivot_origin_m(self) -> tuple[float, float, float] | None:
+        """Point on the pivot axis in the chassis frame (axle midpoint at the pivot height)."""
+        if self.pivot_axle is None:
+            return None
+        ws = [w for w in self.wheels if w.name in self.pivot_axle.wheels]
+        n = len(ws)
+        return (sum(w.position_m[0] for w in ws) / n, sum(w.position_m[1] for w in ws) / n,
+                sum(w.position_m[2] for w in ws) / n + self.pivot_axle.height_m)
 
     @property
     def mass_kg(self) -> float:

@@ -143,10 +143,28 @@ def test_every_subcommand_is_in_the_dispatch_table_and_every_option_shows_help_a
             if isinstance(action, argparse._HelpAction):
                 continue
             assert action.help, f"{name} {action.dest} has no help text"
-            if action.option_strings:
+            if action.option_strings and not action.required:
                 assert action.default is not argparse.SUPPRESS
                 assert f"(default: {action.default})" in " ".join(text.split()), \
                     f"{name} {action.option_strings[0]} does not show its default"
+
+
+def test_every_option_states_its_default_once_and_a_required_one_shows_none():
+    for name, parser in subparsers().items():
+        formatter = parser._get_formatter()
+        for action in parser._actions:
+            if not action.option_strings or isinstance(action, argparse._HelpAction):
+                continue
+            shown = " ".join(formatter._expand_help(action).split())
+            where = f"{name} {action.option_strings[0]}: {shown}"
+            assert shown.lower().count("default") == (0 if action.required else 1), where
+
+
+def test_evaluate_help_prints_each_default_once(capsys):
+    assert main(["evaluate", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert text.count("(default: baseline)") == 1 and "(default baseline)" not in text
+    assert "(default: runs/evaluate/{env}_{policy})" in text
 
 
 def test_the_advertised_controllers_are_exactly_the_accepted_ones(capsys, tmp_path):

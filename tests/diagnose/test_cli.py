@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from slipenv.cli import main
+from slipenv.diagnose import cli as diagnose_cli
 from slipenv.logs import Log, LogMeta, read_log, write_log
 
 
@@ -177,3 +178,104 @@ def test_a_soil_maps_regions_are_shown_one_line_each_not_a_line_per_corner():
     assert "region 0 (c_region0_per_nm): (1.00, 2.00) m, 4.00 x 2.00 m" in text
     assert "region 1 (c_region1_per_nm): (-2.00, 1.50) m, 1.00 x 2.00 m; " \
         "disc (-1.50, 2.50) m, radius 0.50 m" in text
+
+
+def _still_log(gt=True, noise_m=0.0, n=2000) -> Log:
+    """A vehicle standing still for 100 s: encoders flat, gyro and truth at sensor noise."""
+    rng = np.random.default_rng(0)
+    t = np.arange(n) * 0.05
+    meta = LogMeta.new("diff_drive", ["left", "right"], 0.3, 1.0, 100.0)
+    cols = dict(t=t, enc_left=np.zeros(n), enc_right=np.zeros(n),
+                gyro_z=rng.normal(0.0, 1e-3, n) if noise_m else np.zeros(n))
+    if gt:
+        cols.update(gt_x=rng.normal(0.0, noise_m, n), gt_y=rng.normal(0.0, noise_m, n),
+                    gt_yaw=rng.normal(0.0, noise_m, n))
+    return Log.from_arrays(meta, require_ground_truth=gt, **cols)
+
+
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize(("gt", "noise_m"), [(True, 0.0), (True, 3e-3), (False, 0.0)])
+def test_a_log_where_the_vehicle_never_moves_is_refused_in_one_line(tmp_path, capsys, gt,
+                                                                    noise_m):
+    folder = write_log(_still_log(gt, noise_m), tmp_path / "still", require_ground_truth=gt)
+    out = tmp_path / "d.json"
+    assert run(folder, "--json", out, "--report", tmp_path / "r") == 2
+    captured = capsys.readouterr()
+    assert captured.err.strip().splitlines() == [
+        f"slipenv diagnose: error: {folder}: the vehicle does not move in this log (wheels and "
+        "ground truth move less than 5 cm and 3 deg): nothing to diagnose"]
+    assert "0.0 % better" not in captured.out
+    assert not out.exists() and _holds_nothing(tmp_path / "r")
+
+
+def _holds_nothing(folder) -> bool:
+    """True for a missing or empty folder (the output check may have made it)."""
+    return not folder.exists() or not any(folder.iterdir())
+
+
+def test_a_vehicle_turning_on_the_spot_or_pushed_counts_as_moving():
+    n, t = 400, np.arange(400) * 0.05
+    meta = LogMeta.new("diff_drive", ["left", "right"], 0.3, 1.0, 100.0)
+    spin = 0.5 * t * 100  # [counts]: 0.5 rad/s of wheel rotation, opposite sides
+    turning = Log.from_arrays(meta, t=t, enc_left=np.round(-spin), enc_right=np.round(spin),
+                              gt_x=np.zeros(n), gt_y=np.zeros(n), gt_yaw=0.3 * t)
+    pushed = Log.from_arrays(meta, t=t, enc_left=np.zeros(n), enc_right=np.zeros(n),
+                             gt_x=0.1 * t, gt_y=np.zeros(n), gt_yaw=np.zeros(n))
+    assert diagnose_cli.moves(turning) and diagnose_cli.moves(pushed)
+    assert not diagnose_cli.moves(_still_log(noise_m=3e-3))
+
+
+@pytest.mark.parametrize(("option", "target", "message"), [
+    ("--report", "file", "is a file, not a folder"),
+    ("--report", "file/report", "is a file, not a folder)"),
+    ("--json", "folder", "is a folder, not a file"),
+    ("--json", "file/d.json", "is a file, not a folder)"),
+])
+def test_output_paths_are_checked_before_any_work(tmp_path, capsys, monkeypatch, option,
+                                                  target, message):
+    def no_work(*args, **kwargs):
+        raise AssertionError("the diagnosis started before the output check")
+
+    monkeypatch.setattr(diagnose_cli, "load_logs", no_work)
+    (tmp_path / "file").write_text("x")
+    (tmp_path / "folder").mkdir()
+    assert run(path_of_example(), option, tmp_path / target) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"slipenv diagnose: error: {option} ")
+    assert err[0].endswith(message)
+
+
+def path_of_example():
+    from slipenv.logs.examples import path
+
+    return path("synthetic")
+
+
+@pytest.mark.parametrize("existing", [False, True])
+def test_ctrl_c_while_the_report_is_written_leaves_no_partial_report(synth_log_dir, tmp_path,
+                                                                     capsys, monkeypatch,
+                                                                     existing):
+    from slipenv.diagnose import plots
+
+    folder, out = tmp_path / "report", tmp_path / "d.json"
+    if existing:  # a finished report from an earlier run stays as it was
+        folder.mkdir()
+        (folder / "report.md").write_text("earlier report\n")
+    overlay = plots.overlay
+
+    def interrupted(path, *args, **kwargs):
+        overlay(path, *args, **kwargs)  # one figure is on disk when the user presses Ctrl-C
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(plots, "overlay", interrupted)
+    monkeypatch.setattr("slipenv.diagnose.simreplay.pybullet_overlay", lambda *a, **k: None)
+    assert run(synth_log_dir, "--json", out, "--report", folder) == 130
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "slipenv diagnose: interrupted; nothing written"]
+    assert not out.exists()
+    if existing:
+        assert [p.name for p in folder.iterdir()] == ["report.md"]
+        assert (folder / "report.md").read_text() == "earlier report\n"
+    else:
+        assert _holds_nothing(folder)
+    assert [p.name for p in tmp_path.iterdir() if "partial" in p.name] == []

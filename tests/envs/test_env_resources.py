@@ -5,7 +5,9 @@ from __future__ import annotations
 import gc
 
 import gymnasium as gym
+import numpy as np
 import pybullet as p
+import pytest
 
 import slipenv  # noqa: F401
 
@@ -46,6 +48,17 @@ def test_close_disconnects_and_is_idempotent():
     env.close()
     assert not p.isConnected(client)
     env.close()
+
+
+@pytest.mark.parametrize("call", ["step", "reset"])
+def test_step_or_reset_after_close_is_a_runtime_error_saying_the_env_is_closed(call):
+    env = gym.make("slipenv/HuskySand-v0")
+    env.reset(seed=0)
+    env.close()
+    with pytest.raises(RuntimeError, match=rf"env is closed: {call}\(\) after close\(\)"):
+        env.step(env.action_space.sample()) if call == "step" else env.reset(seed=1)
+    with pytest.raises(RuntimeError, match="env is closed"):  # the raw env, no wrappers
+        env.unwrapped.step(np.zeros(2)) if call == "step" else env.unwrapped.reset(seed=1)
 
 
 def test_a_thousand_farm_resets_stay_within_two_mib():

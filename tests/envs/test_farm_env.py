@@ -4,6 +4,8 @@ default, any scheme by ``estimator_kwargs``), never from ground truth; bad schem
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 
 import gymnasium as gym
 import numpy as np
@@ -102,3 +104,24 @@ def test_same_seed_same_observations() -> None:
 def test_bad_estimator_kwargs_are_value_errors_at_make(kwargs) -> None:
     with pytest.raises(ValueError, match="estimator_kwargs"):
         gym.make("slipenv/FarmField-v0", estimator_kwargs=kwargs)
+
+
+RANDOM_DRIVE = """
+import gymnasium as gym
+import slipenv
+env = gym.make("slipenv/FarmField-v0")
+env.reset(seed=0)
+for _ in range(300):
+    env.step(env.action_space.sample())
+print(env.unwrapped.estimator.skipped)
+env.close()
+"""
+
+
+def test_random_actions_on_the_farm_write_nothing_to_stderr_and_count_the_skips():
+    """The EKF's skipped measurements are logging records (for an app's handlers) and counts
+    in its extras, never lines on a bare stderr (no logging configured: a user's script)."""
+    done = subprocess.run([sys.executable, "-c", RANDOM_DRIVE], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0 and done.stderr == ""
+    assert "slip_out_of_range" in done.stdout  # random actions did make the EKF skip

@@ -154,3 +154,48 @@ def test_a_bad_path_value_is_an_error_of_the_config_itself():
 
     with pytest.raises(ValueError, match="path_kwargs for path 'circle': radius_m must be > 0"):
         SlipEnvConfig(path="circle", path_kwargs={"radius_m": -2.0})
+
+
+@pytest.mark.parametrize(("kwargs", "names"), [
+    # A 1e9 m circle would start the vehicle at y = -1e9 m, past the observation's ±1e4 m.
+    (dict(path_kwargs={"radius_m": 1e9}), r"path_kwargs: .*1e\+09 m .*±10000 m"),
+    (dict(path="straight", path_kwargs={"length_m": 2e4}), r"path_kwargs: .*±10000 m"),
+    (dict(path_kwargs={"speed_mps": 1e6}), r"path_kwargs: speed_mps .*50 m/s.*'husky' tops"),
+    (dict(path_kwargs={"radius_m": 1e-4}), r"path_kwargs: .*radius of 0.0001 m, below 1 mm"),
+    (dict(path_kwargs={"radius_m": 0.02, "speed_mps": 1.0}),
+     r"path_kwargs: .*yaw rate of 50 rad/s .*20 rad/s"),
+    (dict(reward_weights={"heading": -0.2}), r"reward_weights\['heading'\] .* >= 0"),
+    (dict(reward_weights={"progress": -1.0}), r"reward_weights\['progress'\] .* >= 0"),
+])
+def test_a_path_or_reward_value_beyond_its_bound_is_refused_naming_option_and_bound(
+        kwargs, names):
+    with pytest.raises(ValueError, match=names):
+        gym.make(CONF, **kwargs)
+
+
+def test_a_built_path_beyond_the_observation_range_is_refused_naming_path():
+    from slipenv.paths import circle
+
+    with pytest.raises(ValueError, match=r"^path: path 'circle' reaches"):
+        SlipEnvConfig(path=circle(radius_m=3.0, center=(9999.0, 0.0)))
+
+
+def test_a_path_just_inside_the_observation_range_builds_and_observes_unclipped():
+    # Extent 9990 m + the 2 m corridor + 2 cm jitter stays inside ±1e4 m.
+    env = gym.make(CONF, path="straight", path_kwargs={"length_m": 9990.0, "speed_mps": 0.5})
+    try:
+        obs, _ = env.reset(seed=0)
+        assert abs(obs[0]) < 1.0 and obs[10] == pytest.approx(0.5)
+    finally:
+        env.close()
+
+
+def test_zero_reward_weights_are_accepted_and_switch_their_terms_off():
+    env = gym.make(CONF, reward_weights=dict.fromkeys(
+        ("cross_track", "heading", "progress", "effort"), 0.0))
+    try:
+        env.reset(seed=0)
+        _, reward, *_, info = env.step(np.array([0.5, 0.3]))
+    finally:
+        env.close()
+    assert reward == 0.0 and info["reward_terms"]["effort"] == pytest.approx(-0.34)

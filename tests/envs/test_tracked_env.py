@@ -26,6 +26,7 @@ FLAT_RIGID = dict(terrain="flat", soil="concrete")
 # (a fifth of the radius), and never more than 20 cm.
 FLAT_MEAN_BOUND_M = 0.05
 FLAT_MAX_BOUND_M = 0.20
+WHOLE_LAP_M = 1.0  # [m] a corridor wide enough that no lap on the slope ends early
 
 
 def lap(feedforward: bool, seed: int, **env_kwargs) -> dict:
@@ -68,11 +69,16 @@ def test_on_flat_rigid_ground_both_controllers_stay_within_the_stated_bound(feed
     assert result["max"] < FLAT_MAX_BOUND_M
 
 
+@pytest.mark.xfail(strict=True, reason=(
+    "the tracked vehicle slides off Yamauchi's r = 0.25 m circle on the 15° slope: over a "
+    "whole lap its true cross-track reaches 0.43-0.45 m (seeds 0-2, measured in a 0.5 m "
+    "corridor), and it leaves the env's 0.1 m corridor (0.4 r) about a quarter of the way "
+    "round (the baseline at 27 % of the lap on seeds 0-2)"))
 @pytest.mark.parametrize("feedforward", [False, True], ids=["feedback", "feedforward"])
 def test_on_the_15_degree_slope_both_controllers_complete_the_lap(feedforward):
-    """Inside the env's 0.5 m corridor all the way round (measured max about 0.43-0.45 m)."""
+    """Inside the env's corridor, 0.4 of the radius, all the way round."""
     result = lap(feedforward, seed=0)
-    assert result["success"] and result["max"] < 0.5
+    assert result["success"]
 
 
 @pytest.mark.xfail(strict=True, reason=(
@@ -82,8 +88,10 @@ def test_on_the_15_degree_slope_both_controllers_complete_the_lap(feedforward):
     "the vehicle runs ahead of its tracks (common-mode slip that Endo's relation cannot "
     "express); with the true pose and β the feed-forward halves the error (next test)."))
 def test_on_the_15_degree_slope_feedforward_beats_feedback_on_every_seed():
+    # The whole lap is compared: a corridor of 1 m (four radii) ends no lap early.
     for seed in (0, 1, 2):
-        assert lap(True, seed)["mean"] < lap(False, seed)["mean"]
+        assert (lap(True, seed, max_cross_track_m=WHOLE_LAP_M)["mean"]
+                < lap(False, seed, max_cross_track_m=WHOLE_LAP_M)["mean"])
 
 
 def truth_lap(feedforward: bool, pole_rps: float) -> float:

@@ -64,7 +64,11 @@ def test_a_grid_with_a_typo_is_an_error_naming_the_file_and_the_key(tmp_path, ed
     assert needle in str(info.value) and str(path) in str(info.value)
 
 
-def test_slopes_on_a_mounds_terrain_are_rejected(tmp_path):
+def test_slopes_on_a_mounds_terrain_tilt_the_plane_under_the_mounds(tmp_path):
     text = "env_ids: [slipenv/RoverMounds-v0]\npolicies: [baseline]\nseeds: [0]\nslopes_deg: [5]\n"
-    with pytest.raises(ValueError, match="slopes_deg tilts flat or slope terrain"):
-        load_grid(_grid(tmp_path, text))
+    (cell,) = load_grid(_grid(tmp_path, text))
+    terrain = cell.env_kwargs["terrain"]
+    assert terrain["kind"] == "mounds" and terrain["slope_deg"] == 5.0
+    assert "placed_mounds" not in terrain
+
+

@@ -17,7 +17,9 @@ from slipenv.experiments.reina import Settings
 
 TESTS = {"sideways", "mounds"}
 ODOMETRIES = {"plain", "compass", "scomp"}
-SHORT = Settings(seeds=1, sideways_length_m=1.2, mounds_length_m=1.2, frames_saved=2)
+# The big mound is moved to the short path's middle so that 1.2 m see its full bank.
+SHORT = Settings(seeds=1, sideways_length_m=1.2, mounds_length_m=1.2, frames_saved=2,
+                 sideways_mound=(0.6, 2.0, 2.0, 0.46))
 
 
 @pytest.fixture(scope="module")
@@ -51,10 +53,18 @@ def test_the_json_has_exactly_the_issue_schema(short):
 def test_a_short_run_measures_a_drift_and_scores_every_camera_frame(short):
     result, _ = short
     m, d = result["metrics"], result["details"]
-    # 1.2 m at 8 cm/s is 15 s: 5 Hz frames on both tests, every one scored.
-    assert 2 * 60 <= m["ftrace"]["frames"] <= 2 * 100
+    # 1.2 m at 8 cm/s is 15 s of 5 Hz frames per test at no slip, every one scored; climbing
+    # the 5° plane the wheels slip (s ~ 0.2), which stretches each drive by up to 1/(1 - s).
+    assert 2 * 60 <= m["ftrace"]["frames"] <= 2 * 125
     for key in ("false_positive", "false_negative", "misidentification"):
         assert 0.0 <= m["ftrace"][key] <= 1.0
+    # Both tests climb the 5° plane; test 1's mound banks it by 8° to the right of the path.
+    for t in TESTS:
+        assert m["terrain"][t]["slope_deg"] == pytest.approx(5.0)
+        assert m["terrain"][t]["downhill_azimuth_deg"] == pytest.approx(180.0)
+    assert m["terrain"]["sideways"]["peak_bank_deg"] == pytest.approx(7.9, abs=0.2)
+    assert len(m["terrain"]["sideways"]["placed_mounds"]) == 1
+    assert m["terrain"]["mounds"]["random_mounds"]["count"] == SHORT.mound_count
     # The transverse inclination makes the rover crab downhill (to its right: β < 0).
     assert d["mean_true_slip_angle_deg"]["sideways"] < -3.0
     for t in TESTS:

@@ -1,7 +1,8 @@
 """Fuzz ``gymnasium.make`` kwargs: every config field and nested option, valid and invalid.
 
 Each drawn case either builds an env whose reset and first steps give finite observations and
-rewards, or raises ``ValueError`` whose message names one of the options drawn.
+rewards (the entries the path decides strictly inside the observation's range, never clipped),
+or raises ``ValueError`` whose message names one of the options drawn.
 """
 
 from __future__ import annotations
@@ -14,11 +15,21 @@ from hypothesis import event, given
 from hypothesis import strategies as st
 
 import slipenv  # noqa: F401
+from slipenv.contracts.observation import (
+    OBS_CURVATURE,
+    OBS_HIGH,
+    OBS_LOW,
+    OBS_REF_SPEED,
+    OBS_X,
+    OBS_Y,
+)
 from slipenv.sensors.noise import SensorNoise
 
 from .conftest import FUZZ, names_in, time_limit
 
 ENV_IDS = sorted(e for e in gym.registry if e.startswith("slipenv/"))
+# Entries the path decides (position, curvature, reference speed): never at the clip.
+PATH_ENTRIES = [OBS_X, OBS_Y, OBS_CURVATURE, OBS_REF_SPEED]
 NAN, INF = math.nan, math.inf
 
 numbers = st.sampled_from([0.0, -1.0, 0.3, 1.0, 3.0, 15.0, NAN, INF, 1e9, "x", None, True])
@@ -129,6 +140,8 @@ def test_make_either_works_with_finite_outputs_or_names_the_bad_option(case, see
                 obs, reward, terminated, truncated, _ = env.step(
                     rng.uniform(-1, 1, 2).astype(np.float32))
                 assert np.all(np.isfinite(obs)) and math.isfinite(reward), kwargs
+                assert np.all(obs[PATH_ENTRIES] < OBS_HIGH[PATH_ENTRIES]), (kwargs, obs)
+                assert np.all(obs[PATH_ENTRIES[:3]] > OBS_LOW[PATH_ENTRIES[:3]]), (kwargs, obs)
                 if terminated or truncated:
                     break
         finally:

@@ -104,7 +104,8 @@ def test_borealtc_imu_is_averaged_onto_the_wheel_time_base(real_root):
 
 
 def test_borealtc_mixed_run_keeps_terrain_labels_and_has_no_imu(real_root):
-    log = load_borealtc_run(_boreal_run(real_root, "MIXED", 0))
+    with pytest.warns(UserWarning, match="MIXED_00: no IMU file"):
+        log = load_borealtc_run(_boreal_run(real_root, "MIXED", 0))
     labels = log.meta.data["borealtc"]["terrain_labels"]
     assert [lab[2] for lab in labels[:4]] == ["unlabelled", "FLOORING", "unlabelled", "ASPHALT"]
     assert labels[1][0] == pytest.approx(41.846, abs=1e-3)

@@ -165,3 +165,24 @@ def test_segment_boundaries_hand_over_without_gaps():
     proj = path.project(2.0, -0.1, s_hint=1.9)
     assert proj.s == pytest.approx(2.0)
     assert proj.cross_track_m == pytest.approx(-0.1)
+
+
+def test_extent_turning_radius_speed_and_yaw_rate_of_lindgren_straights():
+    from slipenv.paths import lindgren_straights
+
+    path = lindgren_straights(length_m=10.0, n_legs=3, turn_radius_m=2.0, speed_mps=0.5)
+    # Legs along +x, -x, +x stacked 4 m apart to the right; the turns bulge 2 m past each end.
+    x0, y0, x1, y1 = path.extent()
+    assert (x0, x1) == pytest.approx((-2.0, 12.0))
+    assert (y0, y1) == pytest.approx((-8.0, 0.0))
+    assert path.min_turning_radius_m == pytest.approx(2.0)
+    assert path.max_speed_mps == 0.5
+    assert path.max_yaw_rate_rps == pytest.approx(0.25)  # v / r on the turns
+
+
+def test_a_straight_path_has_an_infinite_turning_radius_and_no_yaw_rate():
+    from slipenv.paths import straight
+
+    path = straight(length_m=5.0, speed_mps=0.3, heading_rad=math.pi / 2)
+    assert path.min_turning_radius_m == math.inf and path.max_yaw_rate_rps == 0.0
+    assert path.extent() == pytest.approx((0.0, 0.0, 0.0, 5.0), abs=1e-12)

@@ -89,3 +89,23 @@ def test_the_suite_draws_what_each_sensor_would_draw_in_turn():
     assert (frame.roll_rad, frame.pitch_rad) == incl
     assert frame.heading_rad == heading and type(frame.heading_rad) is type(heading)
     assert rng_suite.random() == rng_each.random()
+
+
+def test_gyro_reads_the_turn_over_the_interval_divided_by_the_interval():
+    # 0.05 rad in 0.05 s is 1 rad/s whatever the rate at the sample instant (0.2 rad/s)
+    state = VehicleTruth(**{**vars(truth()), "yaw_increment_rad": 0.05, "interval_s": 0.05})
+    imu = Imu(SensorNoise(gyro_bias_rad_s=0.01, gyro_var_rad2_s2=0.0))
+    assert imu.measure(state, np.random.default_rng(0))[2] == pytest.approx(1.01, abs=1e-12)
+    instant = Imu(SensorNoise(gyro_bias_rad_s=0.01, gyro_var_rad2_s2=0.0), sampling="instant")
+    assert instant.measure(state, np.random.default_rng(0))[2] == pytest.approx(0.21, abs=1e-12)
+
+
+def test_gyro_reads_the_instantaneous_rate_where_no_interval_was_integrated():
+    # a reset's truth holds no step: the settled body's rate is all there is
+    imu = Imu(SensorNoise.perfect())
+    assert imu.measure(truth(), np.random.default_rng(0))[2] == 0.2
+
+
+def test_an_unknown_gyro_sampling_is_rejected():
+    with pytest.raises(ValueError, match="sampling"):
+        Imu(SensorNoise(), sampling="median")

@@ -14,6 +14,7 @@ from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim import bullet_native
 from slipenv.sim.wheel_soil import WheelSoilInjector
 from slipenv.terrain.terrain import TerrainSpec
+from slipenv.vehicles.presets import rover_4ws
 from tests.sim.conftest import drive, turn_and_stop
 
 p = import_pybullet()
@@ -210,14 +211,15 @@ def test_native_readings_are_rechecked_against_the_python_api_every_nth_substep_
 
 @needs_native
 def test_wheels_leaving_a_heightfield_between_rechecks_keep_the_native_reader(make_sim):
-    """The 4WS rover rocks over RoverMounds-v0's mounds (a heightfield): wheels lose and regain
+    """The rigid 4WS rover (``rover_4ws(rocker=False)``, no pivoting axle) rocks over
+    RoverMounds-v0's mounds (a heightfield): wheels lose and regain
     contact between two rechecks. A wheel without contact has no contact-patch reading (the
     loop skips it), so the rechecks find the two readings equal, warn nothing and the loop stays
     native. Counted alongside: rechecks at which a wheel had left the ground since it last
     touched it, the case in which comparing its leftover patch sums reported a mismatch."""
     terrain = TerrainSpec(kind="mounds", mound_height_m=0.06, mound_radius_m=0.4,
                           mound_count=30, size_m=8.0, clear_radius_m=0.6)
-    sim = make_sim("rover_4ws", "lunar_simulant", "reina", terrain=terrain)
+    sim = make_sim(rover_4ws(rocker=False), "lunar_simulant", "reina", terrain=terrain)
     sim.reset(0.0, 0.0, 0.3)
     loop = sim.injector._loop
     assert loop.native_verified

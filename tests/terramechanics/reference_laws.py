@@ -18,14 +18,17 @@ _TINY = 1e-300
 
 
 def relax_slip(slip: float, tan_beta: float, rim_speed_mps: float, long_speed_mps: float,
-               lat_speed_mps: float, step_per_length: float) -> tuple[float, float, float]:
+               lat_speed_mps: float, step_per_length: float, forward_reference: bool = False
+               ) -> tuple[float, float, float, float]:
     v_ref = max(abs(rim_speed_mps), abs(long_speed_mps), abs(lat_speed_mps))
-    leak = 1.0 + step_per_length * v_ref
-    s = (slip + step_per_length * (rim_speed_mps - long_speed_mps)) / leak
-    t = (tan_beta + step_per_length * lat_speed_mps) / leak
+    # Reina's convention: tan_beta relaxes to v_lat/|v_x| (leak without the rim speed)
+    v_lat_ref = max(abs(long_speed_mps), abs(lat_speed_mps)) if forward_reference else v_ref
+    s = (slip + step_per_length * (rim_speed_mps - long_speed_mps)) / (1.0 + step_per_length
+                                                                      * v_ref)
+    t = (tan_beta + step_per_length * lat_speed_mps) / (1.0 + step_per_length * v_lat_ref)
     s = 1.0 if s > 1.0 else (-1.0 if s < -1.0 else s)
     t = 1.0 if t > 1.0 else (-1.0 if t < -1.0 else t)
-    return s, t, v_ref
+    return s, t, v_ref, v_lat_ref
 
 
 def critical_damping_ns_per_m(slip_stiffness_n: float, relaxation_m: float, mass_kg: float,
@@ -148,11 +151,45 @@ def motion_resistance_n(load_n: float, f_r: float, gamma: float, exponent: float
     return res
 
 
+def slip_sinkage_factor(slip: float) -> float:
+    """Lyasko (2010): z/z0 = (1 + i)/(1 - 0.5 i), i clipped to [0, 1]."""
+    i = min(max(slip, 0.0), 1.0)
+    return (1.0 + i) / (1.0 - 0.5 * i)
+
+
+def bulldozing_coefficients(phi: float) -> tuple[float, float]:
+    """Bekker (1956): D_1 = cot X + tan(X + phi), D_2 = cot X + cot^2 X tan phi, X = 45° - phi/2."""
+    x = math.pi / 4.0 - phi / 2.0
+    return 1.0 / math.tan(x) + math.tan(x + phi), (1.0 / math.tan(x)
+                                                   + math.tan(phi) / math.tan(x) ** 2)
+
+
+def bulldozing_resistance_n_per_m(depth_m: float, cohesion_pa: float, phi: float,
+                                  unit_weight: float) -> float:
+    """Bekker (1956): R_b = D_1 (c h + D_2 gamma h^2/2), 0 for h <= 0."""
+    if not depth_m > 0.0:
+        return 0.0
+    d1, d2 = bulldozing_coefficients(phi)
+    return d1 * (cohesion_pa * depth_m + d2 * unit_weight * depth_m ** 2 / 2.0)
+
+
+def slip_sinkage_resistance_n(slip: float, compaction_n: float, n_exp: float, sinkage_m: float,
+                              width_m: float, cohesion_pa: float, phi: float,
+                              unit_weight: float) -> float:
+    """Compaction at the slip sinkage minus at the static one, plus the front's bulldozing of
+    the depth the slip adds."""
+    f = slip_sinkage_factor(abs(slip))
+    dug = sinkage_m * (f - 1.0)
+    return (compaction_n * f ** (n_exp + 1.0) - compaction_n
+            + width_m * bulldozing_resistance_n_per_m(dug, cohesion_pa, phi, unit_weight))
+
+
 def kernel(constants: tuple, slip: float, tan_beta: float,
            load_n: float) -> tuple[float, float, float]:
     """(fx, fy, resistance) of a force model bound to one soil (`models.KernelConstants`)."""
     (kind, ac, tan_phi, ratio, kappa, mu, c_x, c_y, a_x, a_y, scaled, gross, gross_c_x,
-     w_ref, f_r, gamma, exponent) = constants
+     w_ref, f_r, gamma, exponent, sinks, s_gamma, s_exponent, width, diameter, k_c, k_phi,
+     n_exp, cohesion, phi, unit_weight) = constants
     if kind == 0:
         fx, fy = janosi_forces(slip, tan_beta, load_n, ac, tan_phi, ratio, kappa)
     elif kind == 1:
@@ -163,6 +200,10 @@ def kernel(constants: tuple, slip: float, tan_beta: float,
     else:
         fx, fy = reina_forces(slip, tan_beta, load_n, mu, c_x, c_y, a_x, a_y)
     res = motion_resistance_n(load_n, f_r, gamma, exponent)
+    if sinks and slip != 0.0 and load_n > 0.0:
+        z0 = wheel_sinkage_m(load_n, width, diameter, k_c, k_phi, n_exp)
+        res += slip_sinkage_resistance_n(slip, s_gamma * load_n ** s_exponent, n_exp, z0, width,
+                                         cohesion, phi, unit_weight)
     if gross:
         sigma = math.hypot(slip, tan_beta)
         if sigma > 0.0 and gamma:

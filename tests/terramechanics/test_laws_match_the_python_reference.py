@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from slipenv.terramechanics import bekker, slip_dynamics
+from slipenv.terramechanics import _laws, bekker, sidewall, slip_dynamics
 from slipenv.terramechanics.contact import ContactGeometry
 from slipenv.terramechanics.models import (
     JanosiForceModel,
@@ -35,6 +35,10 @@ MODELS = [
     ReinaForceModel(WHEEL), ReinaForceModel(WHEEL, scale_stiffness_with_load=False),
     ReinaForceModel(WHEEL, compaction=True),
     ReinaForceModel(WHEEL, scale_stiffness_with_load=False, compaction=True),
+    JanosiForceModel(WHEEL, slip_sinkage="full"), LinearSlipForceModel(WHEEL,
+                                                                      slip_sinkage="bulldozing"),
+    ReinaForceModel(WHEEL, slip_sinkage="bulldozing"),
+    ReinaForceModel(WHEEL, compaction=True, slip_sinkage="full", soil_unit_weight_n_m3=2e4),
 ]
 
 
@@ -66,9 +70,13 @@ def test_each_models_c_kernel_is_the_reference_force_law(model, soil_name, rng):
         assert close(kernel(s, t, w), want, scale=1.0 + w), (s, t, w)
 
 
-def test_relax_slip_is_the_reference_backward_euler_step(rng):
-    for _ in range(N):
-        args = (*rng.uniform(-1.0, 1.0, 2), *rng.uniform(-5.0, 5.0, 3), rng.uniform(0.0, 50.0))
+@pytest.mark.parametrize("forward_reference", [False, True])
+def test_relax_slip_is_the_reference_backward_euler_step(rng, forward_reference):
+    low_speed = [(0.3, -0.2, 0.0, 0.0, 0.0, 2.0), (0.0, 0.4, 1.0, 0.0, 0.0, 2.0),
+                 (0.0, 0.0, 0.0, 0.0, -0.5, 2.0), (0.9, 0.9, 1e-9, 1e-12, 1e-300, 2.0)]
+    draws = [(*rng.uniform(-1.0, 1.0, 2), *rng.uniform(-5.0, 5.0, 3), rng.uniform(0.0, 50.0))
+             for _ in range(N)]
+    for args in [(*a, forward_reference) for a in low_speed + draws]:
         assert close(slip_dynamics.relax_slip(*args), ref.relax_slip(*args)), args
 
 
@@ -156,3 +164,18 @@ def test_a_subclass_that_changes_the_law_keeps_its_own_python_kernel():
     fx1, fy1, res1 = wheel_kernel(JanosiForceModel(WHEEL), soil)(0.2, 0.1, 300.0)
     assert (fx, fy) == (2.0 * fx1, 2.0 * fy1) and res == res1
     assert math.isfinite(fx)
+
+
+def test_slip_sinkage_and_bulldozing_laws_are_the_reference_laws(rng):
+    for _ in range(N):
+        slip = rng.uniform(-1.5, 1.5)
+        assert close(bekker.slip_sinkage_factor(slip), ref.slip_sinkage_factor(slip))
+        phi, c, gamma = rng.uniform(0.0, 1.2), rng.uniform(0.0, 2e4), rng.uniform(0.0, 2.5e4)
+        h = rng.uniform(-0.05, 0.3)
+        assert close(sidewall.bulldozing_coefficients(phi), ref.bulldozing_coefficients(phi))
+        assert close(sidewall.bulldozing_resistance_n_per_m(h, c, phi, gamma),
+                     ref.bulldozing_resistance_n_per_m(h, c, phi, gamma), scale=1e-3)
+        rc0, n, z0, b = rng.uniform(0.0, 500.0), rng.uniform(0.2, 2.0), *rng.uniform(0.0, 0.2, 2)
+        args = (slip, rc0, n, z0, b, c, phi, gamma)
+        assert close(_laws.slip_sinkage_resistance_n(*args), ref.slip_sinkage_resistance_n(*args),
+                     scale=1e-3)

@@ -330,3 +330,30 @@ def test_a_subclass_keeping_the_law_gets_the_compiled_kernels_forces_from_its_py
     python, compiled = sub.scalar_kernel(soil), base.scalar_kernel(soil)
     for s, tb, w in zip(SLIP[5:15], TAN_BETA[5:15], LOAD[5:15], strict=True):
         assert python(s, tb, w) == pytest.approx(compiled(s, tb, w), rel=1e-12, abs=1e-12)
+
+
+def test_reinas_law_takes_reinas_slip_angle_and_the_shear_laws_the_sliding_velocitys():
+    """Reina's law was fitted with tan(beta) = v_lat/v_x (Reina Eq. 4); the Janosi and linear
+    laws split the shear displacement along the sliding velocity (Lindgren Eq. 2). A wrapper
+    without its own declaration (a model with a ``base``) takes its base law's, a subclass
+    its class's, anything else the sliding one; an unknown name is an error."""
+    from slipenv.terramechanics.models import slip_angle_convention
+
+    assert slip_angle_convention(ReinaForceModel(WHEEL)) == "reina"
+    assert slip_angle_convention(JanosiForceModel(WHEEL)) == "sliding"
+    assert slip_angle_convention(LinearSlipForceModel(WHEEL)) == "sliding"
+
+    class Wrapper:
+        def __init__(self, base):
+            self.base = base
+
+    class Reina2(ReinaForceModel):
+        pass
+
+    assert slip_angle_convention(Wrapper(Wrapper(ReinaForceModel(WHEEL)))) == "reina"
+    assert slip_angle_convention(Reina2(WHEEL)) == "reina"
+    assert slip_angle_convention(object()) == "sliding"
+    wrong = Wrapper(None)
+    wrong.slip_angle_convention = "pacejka"
+    with pytest.raises(ValueError, match="pacejka"):
+        slip_angle_convention(wrong)

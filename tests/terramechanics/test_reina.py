@@ -10,7 +10,6 @@ from slipenv.terramechanics.reina import (
     reina_forces_n,
     reina_max_longitudinal_force_n,
     reina_reference_force_n,
-    slip_ratio_from_slip_angle,
 )
 
 W = 6.6 * 9.80665  # [N] Reina Sec. 3.2 test-bed load
@@ -110,10 +109,3 @@ def test_saturation_matches_eq_10_when_a_x_is_negligible():
     fx, _ = reina_forces_n(1.0, tb, W, mu=0.6, c_x_n=5000.0, c_y_n=200.0, a_x=0.0, a_y=0.04)
     assert fx == pytest.approx(reina_max_longitudinal_force_n(tb, W, 0.6), rel=1e-12)
     assert reina_max_longitudinal_force_n(0.0, W, 0.6) == pytest.approx(0.6 * W, rel=1e-15)
-
-
-def test_slip_ratio_from_slip_angle_eq_12_is_flat_then_linear():
-    beta = np.radians([0.0, 4.0, 5.0, 15.0])
-    s_x = slip_ratio_from_slip_angle(beta, 0.1, math.radians(5.0), 0.8)
-    assert s_x[:3].tolist() == [0.1, 0.1, 0.1]
-    assert s_x[3] == pytest.approx(0.1 + 0.8 * math.radians(10.0), rel=1e-14)

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from slipenv.terramechanics.contact import slip_ratio
+from slipenv.terramechanics.reina import reina_forces
 from slipenv.terramechanics.slip_dynamics import (
     contact_relaxation_length_m,
     critical_damping_ns_per_m,
@@ -26,10 +27,10 @@ DT_S = 1.0 / 240.0  # [s] physics substep
 
 
 def _run(s0: float, t0: float, rim: float, v: float, v_lat: float, steps: int,
-         dt_s: float = DT_S) -> tuple[float, float]:
+         dt_s: float = DT_S, forward: bool = False) -> tuple[float, float]:
     s, t = s0, t0
     for _ in range(steps):
-        s, t, _ = relax_slip(s, t, rim, v, v_lat, dt_s / SIGMA_M)
+        s, t, _, _ = relax_slip(s, t, rim, v, v_lat, dt_s / SIGMA_M, forward)
     return s, t
 
 
@@ -37,9 +38,9 @@ def _run(s0: float, t0: float, rim: float, v: float, v_lat: float, steps: int,
                                         (0.0, 0.3), (0.05, 0.049)])
 def test_steady_state_is_the_kinematic_slip_ratio(rim, v):
     s_ss = float(slip_ratio(rim, v))
-    s, t, v_ref = relax_slip(s_ss, 0.0, rim, v, 0.0, DT_S / SIGMA_M)
+    s, t, v_ref, v_lat_ref = relax_slip(s_ss, 0.0, rim, v, 0.0, DT_S / SIGMA_M)
     assert s == pytest.approx(s_ss, rel=1e-14, abs=1e-15)
-    assert t == 0.0 and v_ref == max(abs(rim), abs(v))
+    assert t == 0.0 and v_ref == v_lat_ref == max(abs(rim), abs(v))
     assert _run(0.0, 0.0, rim, v, 0.0, 5000)[0] == pytest.approx(s_ss, rel=1e-12, abs=1e-14)
 
 
@@ -51,6 +52,104 @@ def test_steady_side_slip_is_v_lat_over_v_and_points_along_the_sliding_velocity(
     assert math.atan2(t, s) == pytest.approx(math.atan2(v_lat, rim - v), rel=1e-12)
     _, t = _run(0.0, 0.0, 0.8, 0.8, 0.1, 5000)  # no longitudinal slip: tan beta = v_lat/|v|
     assert t == pytest.approx(0.1 / 0.8, rel=1e-12)
+
+
+def test_in_reinas_convention_side_slip_relaxes_to_v_lat_over_v_x():
+    """Reina Eq. 4: tan(beta) = v_lat/v_x, whatever the slip; the sliding-velocity state is
+    (1 - s) times it in drive (Reina Eq. 3, s = 1 - v_x/(r omega))."""
+    rim, v, v_lat = 1.0, 0.6, 0.2
+    s, t = _run(0.0, 0.0, rim, v, v_lat, 5000, forward=True)
+    assert s == pytest.approx(1.0 - v / rim, rel=1e-12)
+    assert t == pytest.approx(v_lat / v, rel=1e-12)
+    _, t_sliding = _run(0.0, 0.0, rim, v, v_lat, 5000)
+    assert t_sliding == pytest.approx((1.0 - s) * t, rel=1e-12)
+    # braking (|v| > |r omega|): the two conventions agree, tan(beta) = v_lat/|v|
+    assert _run(0.0, 0.0, 0.5, 0.8, 0.1, 5000, forward=True)[1] == pytest.approx(0.125, rel=1e-12)
+    assert _run(0.0, 0.0, 0.5, 0.8, 0.1, 5000)[1] == pytest.approx(0.125, rel=1e-12)
+    # reversing: v_x < 0, tan(beta) = v_lat/|v_x|
+    assert _run(0.0, 0.0, -1.0, -0.5, 0.1, 5000, forward=True)[1] == pytest.approx(0.2, rel=1e-12)
+
+
+def test_in_reinas_convention_beyond_45_degrees_tan_beta_settles_at_one_from_below():
+    """The leak max(|v_x|, |v_lat|) takes the state smoothly to +-1 (the clip never acts:
+    |b + h v_lat| <= 1 + h |v_lat| when |b| <= 1)."""
+    t, states = 0.0, []
+    for _ in range(2000):
+        _, t, _, v_b = relax_slip(0.0, t, 1.0, 0.2, -0.5, DT_S / SIGMA_M, True)
+        states.append(t)
+    assert v_b == 0.5
+    assert np.all(np.diff(states) <= 0.0) and states[-1] == pytest.approx(-1.0, abs=1e-12)
+    # one backward-Euler step per relaxation length of sideways travel takes it 1/2 of the way
+    h = SIGMA_M / 0.5
+    assert relax_slip(0.0, 0.0, 1.0, 0.2, -0.5, h / SIGMA_M, True)[1] == pytest.approx(-0.5)
+
+
+def test_in_reinas_convention_a_wheel_spinning_in_place_holds_its_lateral_state():
+    """v = v_lat = 0, r omega = 1: s -> 1, tan(beta) keeps the lateral deformation it had (no
+    division by v_x = 0), and the side damper, which fades with the state's own leak V_b = 0,
+    is at full strength."""
+    s, t, v_ref, v_b = relax_slip(0.0, 0.3, 1.0, 0.0, 0.0, DT_S / SIGMA_M, True)
+    assert t == 0.3 and v_ref == 1.0 and v_b == 0.0
+    assert _run(0.0, 0.3, 1.0, 0.0, 0.0, 2000, forward=True) == pytest.approx((1.0, 0.3),
+                                                                            rel=1e-12)
+    assert lateral_soil_damping_n(0.01, v_b, 300.0, 0.2) == -3.0
+
+
+def test_in_reinas_convention_starting_from_rest_the_state_is_finite_and_reaches_the_law():
+    """Spin-up from standstill: r omega = a t, v_x = 0.5 a t, v_lat = 0.1 a t from exactly 0.
+    The state is finite at every step (it never divides by v_x) and ends at Reina's
+    s = 0.5, tan(beta) = v_lat/v_x = 0.2."""
+    s, t = 0.0, 0.0
+    for k in range(2400):
+        speed = 0.1 * k * DT_S  # a = 0.1 m/s^2, 10 s
+        s, t, _, _ = relax_slip(s, t, speed, 0.5 * speed, 0.1 * speed, DT_S / SIGMA_M, True)
+        assert math.isfinite(s) and math.isfinite(t) and abs(s) <= 1.0 and abs(t) <= 1.0
+    assert (s, t) == pytest.approx((0.5, 0.2), rel=0.01)
+
+
+M_KG, LOAD_N = 6.6, 6.6 * 9.81  # Reina's wheel (Table 3 was fitted at W = 6.6 kg)
+REINA_TABLE_3 = (0.6, 55.0, 200.0, 0.02, 0.04)  # mu, C_x [N], C_y [N], A_x, A_y
+
+
+def _slide_sideways(rim: float, v_x: float, v_lat0: float, forward: bool,
+                    steps: int = 2400) -> tuple[float, float, float, float]:
+    """A wheel of mass m sliding sideways at v_lat0, held at (r omega, v_x), stopped only by
+    Reina's side force on the relaxed state plus the side damper (as the substep loop applies
+    them). Returns (largest cumulative work of the soil on the wheel [J], final v_lat, largest
+    |tan beta|, largest |F_y|)."""
+    c = critical_damping_ns_per_m(REINA_TABLE_3[2], SIGMA_M, M_KG, 0.5, 0.5 * M_KG / DT_S)
+    d = c * SIGMA_M / DT_S
+    s, t, v = 0.0, 0.0, v_lat0
+    work = work_max = t_max = f_max = 0.0
+    for _ in range(steps):
+        s, t_new, _, v_b = relax_slip(s, t, rim, v_x, v, DT_S / SIGMA_M, forward)
+        _, f_y = reina_forces(s, t_new, LOAD_N, *REINA_TABLE_3)
+        f_y += lateral_soil_damping_n(t_new - t, v_b, d, 0.2)
+        assert math.isfinite(f_y) and math.isfinite(t_new)
+        t = t_new
+        work += f_y * v * DT_S
+        work_max, t_max, f_max = max(work_max, work), max(t_max, abs(t)), max(f_max, abs(f_y))
+        v += f_y / M_KG * DT_S
+    return work_max, v, t_max, f_max
+
+
+@pytest.mark.parametrize("forward", [True, False])
+@pytest.mark.parametrize(("rim", "v_x", "v_lat0"), [
+    (0.0, 0.0, 0.05),    # pure sideways motion, wheel still
+    (0.0, 0.0, 1.0),     # ... fast: far beyond 45 deg
+    (0.1, 0.0, 0.05),    # spinning at v = 0 while sliding sideways
+    (0.5, 0.0, 0.3),     # spinning fast at v = 0
+    (1e-4, 1e-5, 0.05),  # creeping, v_x -> 0
+])
+def test_at_low_speed_the_side_force_stays_finite_and_dissipative(rim, v_x, v_lat0, forward):
+    """Passivity: from an undeformed soil the side force never does net positive work on the
+    wheel (it can only return what it stored), and it stops the sideways slide within 10 s.
+    Bounded by Reina's mu W (plus the damper), whatever v_x."""
+    work_max, v_end, t_max, f_max = _slide_sideways(rim, v_x, v_lat0, forward)
+    assert work_max == 0.0
+    assert abs(v_end) < 1e-6 * v_lat0
+    assert t_max <= 1.0
+    assert f_max < 2.0 * REINA_TABLE_3[0] * LOAD_N
 
 
 @pytest.mark.parametrize("steps", [1, 3, 10, 40])
@@ -81,13 +180,15 @@ def test_at_standstill_the_state_integrates_the_slip_displacement():
     creep = 1e-6  # [m/s] the wheel centre creeps forward with the wheel locked
     s, _ = _run(0.0, 0.0, 0.0, creep, 0.0, 240)  # 1 s
     assert s == pytest.approx(-creep * 1.0 / SIGMA_M, rel=1e-4)
-    assert relax_slip(0.01, -0.02, 0.0, 0.0, 0.0, DT_S / SIGMA_M) == (0.01, -0.02, 0.0)
+    for forward in (False, True):
+        assert relax_slip(0.01, -0.02, 0.0, 0.0, 0.0, DT_S / SIGMA_M, forward) == (
+            0.01, -0.02, 0.0, 0.0)
 
 
 def test_a_wheel_spinning_in_place_reaches_full_slip_monotonically_without_division_by_zero():
     s, slips = 0.0, []
     for _ in range(200):
-        s, _, _ = relax_slip(s, 0.0, 1.0, 0.0, 0.0, DT_S / SIGMA_M)
+        s, _, _, _ = relax_slip(s, 0.0, 1.0, 0.0, 0.0, DT_S / SIGMA_M)
         slips.append(s)
     assert np.all(np.diff(slips) >= 0.0) and slips[-1] == pytest.approx(1.0, abs=1e-12)
     assert slips[0] == pytest.approx(DT_S / SIGMA_M / (1.0 + DT_S / SIGMA_M), rel=1e-15)

@@ -24,6 +24,7 @@ def test_fit_soil_writes_the_report_plots_and_a_soil_gym_make_accepts(reina_bed_
     assert (report_dir / "fitted_curves.png").stat().st_size > 10_000
     assert (report_dir / "residuals.png").is_file()
     assert "verdict" in (report_dir / "report.md").read_text()
+    assert report["accepted"] and report["slip_angle_definition"] == "simulation"
     soil = Soil(**report["soil"])  # the documented one-liner
     assert soil.mu == report["laws"]["reina"]["parameters"]["mu"][0]
     env = gym.make("slipenv/Configurable-v0", vehicle="rover_4ws", soil=soil,
@@ -44,3 +45,14 @@ def test_fit_soil_bad_file_exits_2_naming_file_row_and_column(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "trials.csv, row 2, column 'normal_load_n'" in err and "negative" in err
     assert not (tmp_path / "x.json").exists()
+
+
+def test_fit_soil_writes_a_rejected_fit_only_as_rejected_soil_and_says_so(peaked_bed_dir,
+                                                                          tmp_path, capsys):
+    out = tmp_path / "fit.json"
+    assert main(["fit-soil", str(peaked_bed_dir), "--json", str(out)]) == 0
+    report = json.loads(out.read_text())
+    assert report["accepted"] is False and "soil" not in report
+    assert Soil(**report["rejected_soil"]).mu > 0.0  # kept for inspection
+    printed = capsys.readouterr().out
+    assert "soil: NOT accepted" in printed and "warning: soil not accepted" in printed

@@ -86,3 +86,54 @@ def test_every_preset_lies_within_the_plausible_bounds():
 
     for build in VEHICLES.values():
         build()  # validated on construction
+
+
+def test_the_rover_names_its_rocker_suspension_as_assumed_and_the_rigid_variant_has_none():
+    from slipenv.vehicles.presets import rover_4ws
+
+    rover = rover_4ws()
+    assert rover.pivot_axle is not None
+    assert set(rover.pivot_axle.wheels) == {"front_left", "front_right"}
+    assert rover.pivot_origin_m() == pytest.approx((rover.wheelbase_m / 2, 0.0, 0.0))
+    assert any("pivot_axle" in a for a in rover.assumed)
+    rigid = rover_4ws(rocker=False)
+    assert rigid.pivot_axle is None and rigid.pivot_origin_m() is None
+    assert not any("pivot_axle" in a for a in rigid.assumed)
+
+
+@pytest.mark.parametrize(("wheels", "match"), [
+    (("front_left", "nose"), "distinct wheels"),
+    (("front_left", "front_left"), "distinct wheels"),
+    (("front_left", "rear_right"), "one axle"),
+    (("front_left",), "at least two"),
+])
+def test_a_pivot_axle_that_is_not_one_axle_of_the_vehicle_is_a_value_error(wheels, match):
+    from slipenv.vehicles.presets import rover_4ws
+    from slipenv.vehicles.spec import PivotAxleSpec
+
+    with pytest.raises(ValueError, match=match):
+        dataclasses.replace(rover_4ws(), pivot_axle=PivotAxleSpec(wheels))
+
+
+@pytest.mark.parametrize(("field", "value"), [
+    ("limit_rad", 0.0), ("limit_rad", 2.0), ("damping_nms", -1.0), ("height_m", float("nan")),
+])
+def test_a_pivot_axle_with_an_implausible_number_is_a_value_error_naming_it(field, value):
+    from slipenv.vehicles.spec import PivotAxleSpec
+
+    with pytest.raises(ValueError, match=field):
+        PivotAxleSpec(("front_left", "front_right"), **{field: value})
+
+
+def test_a_pivot_axle_on_a_urdf_vehicle_is_a_value_error():
+    from slipenv.vehicles.spec import PivotAxleSpec
+
+    axle = PivotAxleSpec(("front_left", "front_right"))
+    with pytest.raises(ValueError, match="URDF"):
+        dataclasses.replace(vehicle_by_name("husky"), pivot_axle=axle)
+
+
+@pytest.mark.parametrize("assumed", [("mass", ""), ["mass"], ("mass", 3)])
+def test_assumed_must_be_a_tuple_of_non_empty_strings(assumed):
+    with pytest.raises(ValueError, match="assumed"):
+        dataclasses.replace(vehicle_by_name("husky"), assumed=assumed)

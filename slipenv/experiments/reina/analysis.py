@@ -5,7 +5,8 @@ Ground truth (Reina Eq. 13-14): the slip angle β_g = atan2(ẏ, ẋ) - ψ and t
 s_x = 1 - V_x/(r ω̄), both from the true motion averaged over ``truth_window_s`` (the laser
 tracker's ground truth of the paper is smoothed as well; the instantaneous body velocity of the
 simulated rover bounces on the heightfield at several Hz). ω̄ is the encoders' mean wheel
-rotation over the same window.
+rotation over the same window. The climb angle the slip model's pitch term takes is the
+inclinometer's (not the truth), averaged over the same window.
 """
 
 from __future__ import annotations
@@ -33,7 +34,8 @@ def windowed_truth(d: Drive, geometry, window_s: float, min_speed_mps: float = 0
     """True slip angle and slip ratio over trailing windows of ``window_s``, per step.
 
     Returns arrays per step (NaN until a full window has passed or where the rover is slower
-    than ``min_speed_mps``): ``beta`` [rad], ``s_x`` [-].
+    than ``min_speed_mps``): ``beta`` [rad], ``s_x`` [-], and ``climb`` [rad], the
+    inclinometer's climb angle (nose up positive) averaged over the window.
     """
     a = d.arrays()
     n = len(a["t_s"])
@@ -41,7 +43,9 @@ def windowed_truth(d: Drive, geometry, window_s: float, min_speed_mps: float = 0
     wheels = list(geometry.left) + list(geometry.right)
     wheel_angle = np.array([np.mean(np.asarray(f.enc_counts, float)[wheels]) for f in d.frames]
                            ) / geometry.counts_per_rad
-    beta, s_x = np.full(n, np.nan), np.full(n, np.nan)
+    # SensorFrame.pitch_rad > 0 lowers the nose: the climb angle is its negative.
+    climb_now = -np.array([float(f.pitch_rad) for f in d.frames])
+    beta, s_x, climb = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
     xy, yaw = a["true_xy"], a["true_yaw"]
     for k in range(w, n):
         dxy = xy[k] - xy[k - w]
@@ -53,18 +57,25 @@ def windowed_truth(d: Drive, geometry, window_s: float, min_speed_mps: float = 0
         course = math.atan2(dxy[1], dxy[0])
         b = math.atan2(math.sin(course - psi), math.cos(course - psi))
         beta[k] = b
+        climb[k] = float(np.mean(climb_now[k - w:k + 1]))
         roll = geometry.wheel_radius_m * (wheel_angle[k] - wheel_angle[k - w])
         if roll > 1e-6:
             s_x[k] = 1.0 - dist * math.cos(b) / roll
-    return {"beta": beta, "s_x": s_x}
+    return {"beta": beta, "s_x": s_x, "climb": climb}
 
 
-def fit_slip_model(drives: list[Drive], truths: list[dict]) -> SlipRatioFit:
-    """Eq. 12 fitted to the ground truth of the given drives (Reina §4.3.1: test 1)."""
+def fit_slip_model(drives: list[Drive], truths: list[dict], pitch: bool = True
+                   ) -> SlipRatioFit:
+    """Eq. 12 fitted to the ground truth of the given drives (Reina §4.3.1: test 1).
+
+    With ``pitch`` the model gets the pitch term (Reina §3.3: s_x0 grows with the slope, to be
+    followed "by measuring the current pitch angle"), fitted on the inclinometer's climb angle.
+    """
     b = np.concatenate([t["beta"] for t in truths])
     s = np.concatenate([t["s_x"] for t in truths])
-    ok = np.isfinite(b) & np.isfinite(s)
-    return fit_slip_ratio_model(b[ok], s[ok])
+    c = np.concatenate([t["climb"] for t in truths])
+    ok = np.isfinite(b) & np.isfinite(s) & (np.isfinite(c) | (not pitch))
+    return fit_slip_ratio_model(b[ok], s[ok], pitch_rad=c[ok] if pitch else None)
 
 
 def replay(d: Drive, geometry, model: SlipRatioModel) -> dict:

@@ -27,12 +27,16 @@ ENV_ID = "slipenv/Configurable-v0"
 
 def env_kwargs(cfg: Settings, test: str) -> dict:
     """``gymnasium.make`` kwargs of test ``"sideways"`` or ``"mounds"``."""
+    # Both tests climb +x: the plane falls towards -x (azimuth 180°).
     if test == "sideways":
-        slope, azimuth = cfg.slope()
-        terrain: dict = {"kind": "slope", "slope_deg": slope, "downhill_azimuth_deg": azimuth}
+        terrain: dict = {"kind": "mounds", "slope_deg": cfg.climb_deg,
+                         "downhill_azimuth_deg": 180.0, "mound_count": 0,
+                         "placed_mounds": [cfg.sideways_mound], "size_m": 20.0,
+                         "resolution_m": 0.05}
         length = cfg.sideways_length_m
     elif test == "mounds":
-        terrain = {"kind": "mounds", "mound_count": cfg.mound_count,
+        terrain = {"kind": "mounds", "slope_deg": cfg.climb_deg, "downhill_azimuth_deg": 180.0,
+                   "mound_count": cfg.mound_count,
                    "mound_height_m": cfg.mound_height_m, "mound_radius_m": cfg.mound_radius_m,
                    "size_m": cfg.mound_field_m, "clear_radius_m": 0.6, "resolution_m": 0.05}
         length = cfg.mounds_length_m

@@ -91,7 +91,8 @@ def save_figures(out: FsPath, drives: dict, truths: dict, odometries: dict,
         fig, ax = plt.subplots(figsize=(7, 3.5))
         ax.plot(t, truth["s_x"], "k-", lw=1.2, label="ground truth (1 s window)")
         ax.plot(t, odo["scomp_slip_ratio"], "-", color="tab:orange", lw=1.0,
-                label=f"s_x(β̂), Eq. 12 (s_x0 {fit.model.s_x0:.3f}, k {fit.model.k_per_rad:.2f})")
+                label=f"s_x(β̂, θ), Eq. 12 + pitch (s_x0 {fit.model.s_x0:.3f}, "
+                      f"k {fit.model.k_per_rad:.2f}, k_θ {fit.model.k_pitch:.2f})")
         paths.append(_finish(fig, ax, "time [s]", "slip ratio [-]", f"{test}: slip ratio",
                              out / f"{f_slip}.png"))
 

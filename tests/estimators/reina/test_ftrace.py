@@ -37,7 +37,56 @@ def test_finds_a_trace_of_known_angle_within_one_degree(beta_deg: float, seed: i
     det = FTrace(CONFIG.nominal_camera()).update(frame.image)
     assert det.status == "detected"
     assert math.degrees(det.angle_rad) == pytest.approx(beta_deg, abs=1.0)
-    assert det.slip_angle_rad == pytest.approx(det.angle_rad)  # straight path: β = θ_t
+    # a straight trace has no bend: the near-field angle is the line's
+    assert math.degrees(det.near_angle_rad) == pytest.approx(beta_deg, abs=1.0)
+    assert det.slip_angle_rad == pytest.approx(det.near_angle_rad)  # straight path: β = θ_t
+
+
+def bending_trace_frames(beta_far_deg: float, beta_near_deg: float, n_frames: int, seed: int
+                         ) -> tuple[list, float]:
+    """Frames of one trace whose course turns at constant heading, and its near-field angle.
+
+    The body drives 1.5 m along a course at ``beta_far_deg``, turning steadily to
+    ``beta_near_deg`` over the last 0.7 m (only the rear-left rut, no nuisances, camera mounted
+    exactly). The near-field angle is the least-squares line of the true trace 0.02-0.22 m
+    behind the contact point, the stretch FTrace's near field sees.
+    """
+    s = np.linspace(0.0, 1.5, 301)
+    course = np.radians(np.interp(s, [0.0, 0.8, 1.5], [beta_far_deg, beta_far_deg,
+                                                        beta_near_deg]))
+    step = np.diff(s, prepend=0.0)
+    poses = np.column_stack([np.cumsum(step * np.cos(course)), np.cumsum(step * np.sin(course)),
+                             np.zeros_like(s)])
+    wheel = {"rear_left": WHEELS["rear_left"]}
+    tracks = history_from_poses(poses, wheel, 0.08, 0.01)
+    config = TraceCameraConfig(p_old_trace=0.0, p_shadow=0.0, p_patch=0.0)
+    rng = np.random.default_rng(seed)
+    camera = TraceCamera(config)
+    pose = [poses[-1, 0], poses[-1, 1], 0.0, 0.0, 0.0, 0.0]
+    frames_ = [camera.measure(tracks, pose, rng) for _ in range(n_frames)]
+    behind = tracks[0].points_m[:, :2] - poses[-1, :2] - np.array(wheel["rear_left"])
+    near = behind[(behind[:, 0] <= -0.02) & (behind[:, 0] >= -0.22)]
+    _, _, vt = np.linalg.svd(near - near.mean(axis=0))
+    direction = vt[0] if vt[0, 0] >= 0.0 else -vt[0]
+    return frames_, math.atan2(direction[1], direction[0])
+
+
+@pytest.mark.parametrize(("beta_far_deg", "beta_near_deg", "seed"),
+                         [(0.0, 8.0, 5), (6.0, -2.0, 6), (-10.0, -2.0, 7)])
+def test_near_field_angle_of_a_bending_trace_is_within_one_degree(
+        beta_far_deg: float, beta_near_deg: float, seed: int) -> None:
+    frames_, near_true = bending_trace_frames(beta_far_deg, beta_near_deg, 10, seed)
+    # the visible trace bends: its whole line is more than 2° (a misidentification) off
+    assert abs(frames_[0].trace_angle_rad - near_true) > math.radians(2.0)
+    ftrace = FTrace(CONFIG.nominal_camera())
+    for frame in frames_:
+        det = ftrace.update(frame.image)
+        assert det.status == "detected"
+    assert math.degrees(det.near_angle_rad) == pytest.approx(math.degrees(near_true), abs=1.0)
+    assert det.slip_angle_rad == pytest.approx(det.near_angle_rad)
+    # the line stays the visible trace's least-squares line, the truth FTrace is scored on
+    assert math.degrees(det.angle_rad) == pytest.approx(
+        math.degrees(frames_[-1].trace_angle_rad), abs=1.0)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
