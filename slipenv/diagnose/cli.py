@@ -116,8 +116,8 @@ def diagnose(logs: list[Log], where: str, *, progress: bool = False, jobs: int =
     from slipenv.diagnose.select import select
     from slipenv.diagnose.workers import check_jobs, one_blas_thread
 
+    jobs = check_jobs(jobs)  # the arguments first, then the data
     refuse_still(logs, where)
-    jobs = check_jobs(jobs)
     try:
         with one_blas_thread():  # the same numbers on every machine (``workers.py``)
             problem = Problem.from_segments(build_segments(logs))
