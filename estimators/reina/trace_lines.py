@@ -119,6 +119,16 @@ def candidates_from_segments(ground: np.ndarray, wheel_xy_m: tuple[float, float]
                       lines)
 
 
+def edge_pixels(edges: np.ndarray) -> np.ndarray:
+    """(column, row) of every edge pixel in row-major order, as np.nonzero gives them, shape
+    (k, 2) float; OpenCV's scan is about three times faster on a uint8 edge map."""
+    if edges.dtype == np.uint8 and edges.ndim == 2:
+        found = cv2.findNonZero(edges)
+        return np.zeros((0, 2)) if found is None else found.reshape(-1, 2).astype(float)
+    rows, cols = np.nonzero(edges)
+    return np.column_stack([cols, rows]).astype(float)
+
+
 def edge_points_ground(edges: np.ndarray, camera: PinholeCamera, ground_z_m: float,
                        image: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Every edge pixel of an edge map back-projected to the ground, and its edge normal.
@@ -127,14 +137,7 @@ def edge_points_ground(edges: np.ndarray, camera: PinholeCamera, ground_z_m: flo
     on the ground at each, shape (k, 2) (the normal of the edge through the pixel; Sobel on
     ``image``, NaN without one). Pixels that do not hit the ground are dropped.
     """
-    # (column, row) of every edge pixel in row-major order, as np.nonzero gives them;
-    # OpenCV's scan is about three times faster on a uint8 edge map
-    if edges.dtype == np.uint8 and edges.ndim == 2:
-        found = cv2.findNonZero(edges)
-        uv = np.zeros((0, 2)) if found is None else found.reshape(-1, 2).astype(float)
-    else:
-        rows, cols = np.nonzero(edges)
-        uv = np.column_stack([cols, rows]).astype(float)
+    uv = edge_pixels(edges)
     if not len(uv):
         return np.zeros((0, 2)), np.zeros((0, 2))
     pts = camera.image_to_ground(uv, ground_z_m)
@@ -320,14 +323,7 @@ def refine_angle(edges: np.ndarray, camera: PinholeCamera, ground_z_m: float,
     rather than along the Hough segment only. Falls back to ``angle_rad`` when too few pixels
     support the fit.
     """
-    # (column, row) of every edge pixel in row-major order, as np.nonzero gives them;
-    # OpenCV's scan is about three times faster on a uint8 edge map
-    if edges.dtype == np.uint8 and edges.ndim == 2:
-        found = cv2.findNonZero(edges)
-        uv = np.zeros((0, 2)) if found is None else found.reshape(-1, 2).astype(float)
-    else:
-        rows, cols = np.nonzero(edges)
-        uv = np.column_stack([cols, rows]).astype(float)
+    uv = edge_pixels(edges)
     if len(uv) < 10:
         return angle_rad
     pts = camera.image_to_ground(uv, ground_z_m)
