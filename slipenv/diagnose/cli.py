@@ -183,17 +183,16 @@ def log_folder(args) -> Path:
 def main(args) -> int:
     """Entry point of ``slipenv diagnose`` (see ``slipenv.cli``); returns the exit code.
 
-    Outputs are checked first (again: ``slipenv.cli`` checks them before calling this). A
-    Ctrl-C propagates (``slipenv.cli.main`` prints the one line, status 130) once the staged
-    reports are removed: the JSON path and the report folder then hold nothing of this run.
+    ``slipenv.cli`` has checked the output paths before calling this. A Ctrl-C propagates
+    (``slipenv.cli.main`` prints the one line, status 130) once the staged reports are
+    removed: the JSON path and the report folder then hold nothing of this run.
     """
-    from slipenv.cli_outputs import output_dir, output_file
     from slipenv.diagnose import report as rep
 
     start = time.perf_counter()
     folder = log_folder(args)
-    json_path = output_file(args.json, "--json")
-    report_dir = None if args.report is None else output_dir(args.report, "--report")
+    json_path = None if args.json is None else Path(args.json)
+    report_dir = None if args.report is None else Path(args.report)
     quiet = bool(getattr(args, "quiet", False))
     if not _has_truth(folder):
         from slipenv.diagnose import proprio

@@ -64,6 +64,7 @@ import math
 
 import numpy as np
 
+from slipenv.terramechanics.bekker import slip_sinkage_factor as bekker_slip_sinkage
 from slipenv.terramechanics.janosi import janosi_stress_pa, shear_strength_pa
 
 __all__ = [
@@ -357,9 +358,10 @@ def soil_damper_forces(dj_m: np.ndarray, shear_force_n: np.ndarray,
 # -- sinkage and compaction ------------------------------------------------------------------
 def slip_sinkage_factor(slip):
     """Lyasko's slip-sinkage factor z/z0 = (1 + i)/(1 - 0.5 i), slip i clipped to [0, 1]
-    (Lyasko, "Slip sinkage effect in soil-vehicle mechanics", J. Terramech. 47 (2010) 21-31)."""
-    i = np.minimum(np.maximum(slip, 0.0), 1.0)
-    return (1.0 + i) / (1.0 - 0.5 * i)
+    (Lyasko, "Slip sinkage effect in soil-vehicle mechanics", J. Terramech. 47 (2010) 21-31),
+    element by element: the wheels' C law (`bekker.slip_sinkage_factor`), one slip per track."""
+    slip = np.asarray(slip, dtype=float)
+    return np.array([bekker_slip_sinkage(float(i)) for i in slip.ravel()]).reshape(slip.shape)
 
 
 def rut_resistance_n(resistance_n: float, travel_m: float, cut_front_m: float,

@@ -48,6 +48,7 @@ from slipenv.terramechanics.bekker import wheel_sinkage_float_m
 from slipenv.terramechanics.contact import ContactGeometry
 from slipenv.terramechanics.models import force_model_by_name, slip_angle_convention
 from slipenv.terramechanics.sidewall import sidewall_force_n
+from slipenv.terramechanics.slip_dynamics import relax_slip
 from slipenv.terramechanics.soil import Soil
 from slipenv.testbed.csv_format import TestBedData
 
@@ -161,15 +162,18 @@ def law_input_definition(model) -> str:
     return "reina" if slip_angle_convention(model) == "reina" else "simulation"
 
 
+_STEADY_STEP = 1e15  # [s/m] h of `relax_slip` for its steady state
+
+
 def convert_slip_state(slip, tan_beta, source: str, target: str):
     """(s, tan beta) given in definition `source` as the simulation feeds a law taking `target`.
 
     The data: s = (r omega - v)/max(|r omega|, |v|) (so v = 1 - s driving, 1 braking, in units
     of that maximum) and tan beta = v_lat/v (``reina``, Reina Eq. 4) or v_lat/max(|r omega|,
-    |v|) (``simulation``). The law's input is the steady relaxation state
-    (`slipenv.terramechanics.slip_dynamics.relax_slip`): s = (r omega - v)/V, V = max(|r omega|,
-    |v|, |v_lat|), and tan beta = v_lat/V (``simulation``: the sliding velocity's direction) or
-    v_lat/max(|v|, |v_lat|) (``reina``: Reina's, +-1 beyond 45 deg).
+    |v|) (``simulation``). The law's input is the steady state of the relaxation, computed by
+    `slipenv.terramechanics.slip_dynamics.relax_slip` itself: s = (r omega - v)/V,
+    V = max(|r omega|, |v|, |v_lat|), and tan beta = v_lat/V (``simulation``: the sliding
+    velocity's direction) or v_lat/max(|v|, |v_lat|) (``reina``: Reina's, +-1 beyond 45 deg).
 
     Raises
     ------
@@ -188,11 +192,14 @@ def convert_slip_state(slip, tan_beta, source: str, target: str):
                          "reference): cannot convert it")
     rim, v = np.where(s > 0.0, 1.0, 1.0 + s), np.where(s > 0.0, 1.0 - s, 1.0)
     v_lat = t * v if source == "reina" else t
-    ref = np.maximum(1.0, np.abs(v_lat))
-    if target == "simulation":
-        return (rim - v) / ref, v_lat / ref
-    side = np.maximum(np.abs(v), np.abs(v_lat))
-    return (rim - v) / ref, np.divide(v_lat, side, out=np.zeros_like(v_lat), where=side > 0.0)
+    # The relaxation's own steady state: one step with h = dt/sigma so large that the state
+    # it starts from no longer counts (1e-15 relative).
+    forward = target == "reina"
+    rim, v, v_lat = np.broadcast_arrays(rim, v, v_lat)
+    steady = [relax_slip(0.0, 0.0, float(r), float(u), float(w), _STEADY_STEP, forward)[:2]
+              for r, u, w in zip(rim.ravel(), v.ravel(), v_lat.ravel(), strict=True)]
+    out = np.array(steady, dtype=float).reshape(*rim.shape, 2)
+    return out[..., 0], out[..., 1]
 
 
 def sinkage_of(data: TestBedData, base: Soil, index=slice(None)) -> np.ndarray:
