@@ -16,6 +16,11 @@ miss, counted in the ``confounded`` column.
 vehicle, ``rover4ws`` 4WD/4WS rover), each effect hidden on it equally often, and adds the
 effect x vehicle table.
 
+``--durations 60,120,300`` generates the same seeds (the same worlds and routes) at every
+length and adds the vehicle x length table (named right / logs, false alarms on the clean
+logs, confounded logs); logs are printed as they finish, clean logs first and the rest round
+by round over lengths and vehicles, so a run stopped early has covered every cell alike.
+
 The generator's seeds change every run (printed; pass ``--seed`` to repeat a run).
 
 ``--kinematic N`` also runs the kinematic generator (``slipenv.diagnose.kinematic``: correlated
@@ -33,6 +38,8 @@ mean diagnosis time.
 
     python benchmarks/diagnose_hit_rate.py --n 40 --duration 120 --jobs 2
     python benchmarks/diagnose_hit_rate.py --n 16 --duration 120 --jobs 1 \\
+        --vehicles diff_drive,skid_steer,tracked,rover4ws
+    python benchmarks/diagnose_hit_rate.py --n 6 --durations 60,120,300 --jobs 2 \\
         --vehicles diff_drive,skid_steer,tracked,rover4ws
     python benchmarks/diagnose_hit_rate.py --n 0 --kinematic 30 --duration 120
     python benchmarks/diagnose_hit_rate.py --n 0 --kinds 5 --lengths 60,120,300
@@ -55,7 +62,7 @@ from __future__ import annotations
 import argparse
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 
 import numpy as np
 
@@ -93,7 +100,7 @@ def run_one(job: tuple) -> dict:
         rel = {k: abs(rep[k][0] / v - 1.0) for k, v in synth.world.items()
                if k in rep and isinstance(v, float) and v != 0 and not k.startswith("patch_c")}
     conf = None if effect == "none" else EFFECTS[effect].confound(synth.log.meta.kind)
-    return {"seed": seed, "effect": effect, "kind": synth.log.meta.kind,
+    return {"seed": seed, "effect": effect, "kind": synth.log.meta.kind, "duration": duration,
             "vehicle": vehicle or synth.log.meta.kind, "cause": sel.cause,
             "confounded": conf is not None and sel.cause == conf.shows_as,
             "also": sel.also, "z": z, "rel": rel, "gen_s": t1 - t0, "diag_s": t2 - t1,
@@ -166,6 +173,33 @@ def vehicle_table(results: list[dict], vehicles: list[str]) -> str:
         cells.append(f"**{sum(r['cause'] == r['effect'] for r in rs)}/{len(rs)}**, "
                      f"{np.mean([r['diag_s'] for r in rs]):.1f} s" if rs else "–")
     rows.append(f"| **all** (mean diagnosis time) | {' | '.join(cells)} |")
+    return "\n".join(rows)
+
+
+def length_table(by_length: dict[float, list[dict]], vehicles: list[str]) -> str:
+    """Vehicle x log length table (markdown): named right / logs, confounded and false alarms
+    on clean logs said in the cell; the last row and column pool them."""
+    lengths = list(by_length)
+
+    def cell(rs: list[dict]) -> str:
+        if not rs:
+            return "–"
+        clean = [r for r in rs if r["effect"] == "none"]
+        alarms = sum(r["cause"] != "none" for r in clean)
+        conf = sum(r["confounded"] for r in rs)
+        return (f"{sum(r['cause'] == r['effect'] for r in rs)}/{len(rs)} "
+                f"({alarms}/{len(clean)} false alarms" + (f", {conf} confounded" if conf else "")
+                + ")")
+
+    head = " | ".join(f"{d / 60:g} min" for d in lengths)
+    rows = [f"| vehicle | {head} | all |", "|---|" + "---|" * (len(lengths) + 1)]
+    for v in vehicles:
+        cells = [cell([r for r in by_length[d] if r["vehicle"] == v]) for d in lengths]
+        cells.append(cell([r for d in lengths for r in by_length[d] if r["vehicle"] == v]))
+        rows.append(f"| {v} | {' | '.join(cells)} |")
+    cells = [cell(by_length[d]) for d in lengths]
+    cells.append(cell([r for d in lengths for r in by_length[d]]))
+    rows.append(f"| **all** | {' | '.join(cells)} |")
     return "\n".join(rows)
 
 
@@ -351,6 +385,10 @@ def main(argv: list[str] | None = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--n", type=int, default=40, help="number of logs (default 40)")
     parser.add_argument("--duration", type=float, default=120.0, help="log length [s]")
+    parser.add_argument("--durations", default=None,
+                        help="comma-separated log lengths [s] of the PyBullet logs: the same "
+                             "seeds (the same worlds and routes) at every length, and the "
+                             "vehicle x length table (default: --duration alone)")
     parser.add_argument("--seed", type=int, default=None, help="base seed (default: random)")
     parser.add_argument("--jobs", type=int, default=2, help="worker processes")
     parser.add_argument("--effects", default=",".join(DRAWN),
@@ -400,32 +438,56 @@ def main(argv: list[str] | None = None) -> int:
         print(kinematic_table(args.kinematic, args.duration, args.jobs), flush=True)
     if args.n <= 0:
         return 0
+    durations = ([float(v) for v in args.durations.split(",")] if args.durations
+                 else [args.duration])
     base = args.seed if args.seed is not None else int.from_bytes(os.urandom(3), "little")
     rng = np.random.default_rng(base)
-    jobs = []
+    draws_of = []
     for v in vehicles:
         # every effect hidden on the vehicle equally often (clean logs included), random order
         mine = [e for e in effects if v is None or v in HIDDEN_ON[e]]
         draws = [mine[i % len(mine)] for i in range(args.n)]
         rng.shuffle(draws)
-        jobs += [(base * 1000 + len(jobs) + i, e, args.duration, v) for i, e in enumerate(draws)]
-    print(f"base seed {base}: {args.n} logs of {args.duration:g} s per vehicle "
-          f"{vehicles}, effects {effects}", flush=True)
+        draws_of.append((v, draws))
+    print(f"base seed {base}: {args.n} logs of {', '.join(f'{d:g}' for d in durations)} s "
+          f"per vehicle {vehicles}, effects {effects}", flush=True)
+    jobs = []
+    for duration in durations:  # the same seeds at every length
+        mine = []
+        for v, draws in draws_of:
+            mine += [(base * 1000 + len(mine) + i, e, duration, v) for i, e in enumerate(draws)]
+        jobs += mine
+    # run order (not seeds): clean logs first, then round by round over lengths and vehicles,
+    # so that a run stopped early has covered every cell alike
+    rank = {(j[0], j[2]): (j[1] != "none", (j[0] - base * 1000) % max(args.n, 1),
+                           durations.index(j[2])) for j in jobs}
+    jobs.sort(key=lambda j: rank[(j[0], j[2])])
+    by_length: dict[float, list[dict]] = {d: [] for d in durations}
+    start = time.perf_counter()
+    # one pool for every length: a worker's cached calibration runs serve all its logs
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-        results = []
-        for r in pool.map(run_one, jobs):
+        # printed as they finish (a 5-minute log does not hold back the short ones)
+        for done in as_completed([pool.submit(run_one, j) for j in jobs]):
+            r = done.result()
             flag = ("ok " if r["cause"] == r["effect"] else
                     "CONF" if r["confounded"] else "MISS")
             zs = " ".join(f"{k}={v:+.1f}" for k, v in r["z"].items())
-            print(f"{flag} seed {r['seed']} {r['vehicle']:10s} {r['effect']:15s} -> {r['cause']}"
-                  f"{'+' + '+'.join(r['also']) if r['also'] else ''}  [{r['diag_s']:.1f} s]"
-                  f"  {zs}", flush=True)
-            results.append(r)
-    print()
-    print(table(results))
-    if args.vehicles:
+            print(f"{flag} {r['duration']:g} s seed {r['seed']} {r['vehicle']:10s} "
+                  f"{r['effect']:15s} -> {r['cause']}"
+                  f"{'+' + '+'.join(r['also']) if r['also'] else ''}  "
+                  f"[{r['diag_s']:.1f} s]  {zs}", flush=True)
+            by_length[r["duration"]].append(r)
+    for duration, results in by_length.items():
+        results.sort(key=lambda r: r["seed"])
+        print(f"\n{duration:g} s logs:")
+        print(table(results))
+        if args.vehicles:
+            print()
+            print(vehicle_table(results, vehicles))
+    if len(durations) > 1 and args.vehicles:
         print()
-        print(vehicle_table(results, vehicles))
+        print(length_table(by_length, vehicles))
+    print(f"\nwall time {time.perf_counter() - start:.0f} s", flush=True)
     return 0
 
 

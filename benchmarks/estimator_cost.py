@@ -7,7 +7,8 @@ given and the frames it produced -- and then, with PyBullet out of the loop, rep
 * the sensor suite over the recorded truths (``SensorSuite.measure``, beacons included);
 * every estimator over the recorded frames (``reset`` once, then ``update`` per frame):
   dead reckoning, gyrodometry, Endo's skid-steer odometry, Reina's compass odometry and the
-  Lindgren EKF in schemes 1-4 (compiled by numba from its Python text).
+  Lindgren EKF in schemes 1-5 (compiled by numba from its Python text), and schemes 4 and 5
+  with the lateral slip gain (scheme 4's is FarmField-v0's own filter).
 
 Before the timed passes it also reports the Lindgren EKF's one-off costs in this process:
 importing it (numba included) and its first frame, which loads the compiled code from numba's
@@ -80,9 +81,15 @@ def estimator_factories(spec, context) -> dict[str, Callable[[], object]]:
         "skid_steer_endo": lambda: make_estimator("endo", spec, context),
         "reina_compass_odometry": lambda: CompassOdometry(geometry),
     }
-    for scheme in (1, 2, 3, 4):
+    for scheme in (1, 2, 3, 4, 5):
         f[f"lindgren_ekf_s{scheme}"] = (
             lambda s=scheme: make_estimator("lindgren_ekf", spec, context, scheme=s))
+    # FarmField-v0's own filter: scheme 4 with the lateral slip gain
+    lateral = {"lateral_slip_sigma0": 3.0}
+    f["lindgren_ekf_s4_lateral"] = (
+        lambda: make_estimator("lindgren_ekf", spec, context, scheme=4, params=lateral))
+    f["lindgren_ekf_s5_lateral"] = (
+        lambda: make_estimator("lindgren_ekf", spec, context, scheme=5, params=lateral))
     return f
 
 

@@ -6,15 +6,17 @@
 3. OptiOdom, per session: the same within each recording session.
 4. OptiOdom, across path types: the effect chosen on all runs, fitted on the runs of one path
    type only and scored on the runs of the other types (never used for fitting).
-5. OptiOdom, single runs (``--single``): every circle and square run whose nominal dead
-   reckoning drifts more than 3° in heading over the run, diagnosed alone; the model fitted on
-   that one run applied to the *other* sessions' circle runs (whole-run dead reckoning from
-   the first logged pose): the mean cut of their final position error.
+5. OptiOdom, single runs (``--single``): every circle and square run whose drift shows in
+   both halves (nominal heading drift beyond 3° over the run, at least 1.5° the same way in
+   each half, each half dead-reckoned from its own first pose), diagnosed alone; the model
+   of that one run applied to the *other* sessions' circle and square runs (whole-run dead
+   reckoning from the first logged pose): the cut of their mean final position error, beside
+   the oracle (the width alone, and the width and radii, fitted on the whole dead-reckoned
+   path of the same run).
 6. OptiOdom, whole sessions (``--sessions``): the model diagnosed on one session folder (all
-   its runs together) applied to the *other* sessions' circle (arc) runs, dead-reckoned whole:
-   the cut of their mean final position error, per session and on average (the target is
-   at least 50 %); and the same with only what the session determines for arcs applied (a
-   session that turns on the spot determines the distance scale, not the turn scale of arcs).
+   its runs together) applied to the *other* sessions' circle and square runs the same way,
+   per session (the target is a cut of at least 50 %), beside the oracle fitted on the whole
+   paths of the session's runs.
 7. BorealTC (no ground truth): yaw efficiency per terrain (``slipenv.diagnose.proprio``).
 8. OptiOdom square runs (``--pivots``): where the robot turns on the spot, relative to the
    OptiTrack body origin (each pivot's logged poses fitted as origin = centre + R(ψ) d: |d|
@@ -25,6 +27,7 @@
     python benchmarks/real_data.py --out runs/real
     python benchmarks/real_data.py --out runs/real --single     # only step 5 (about 1 minute)
     python benchmarks/real_data.py --out runs/real --sessions   # only step 6
+    python benchmarks/real_data.py --out runs/real --transfer   # steps 6 and 5
     python benchmarks/real_data.py --out runs/real --pivots     # only step 8 (seconds)
 """
 
@@ -39,15 +42,14 @@ import numpy as np
 
 from slipenv.diagnose import proprio
 from slipenv.diagnose.cli import diagnose, load_logs
-from slipenv.diagnose.effects.rolling_radius import RollingRadius
 from slipenv.diagnose.extension import parse_model
 from slipenv.diagnose.fit import Problem, fit
-from slipenv.diagnose.numbers import determined
 from slipenv.diagnose.replay import build_segments, simulate
 from slipenv.diagnose.segments import cut_spans, log_arrays, wheel_sides
 from slipenv.logs.real import convert_real_datasets
 
 DRIFT_DEG = 3.0  # [deg] a run "visibly drifts" beyond this nominal heading error at its end
+HALF_DRIFT_DEG = 1.5  # [deg] ... and each half by at least this much, the same way
 
 
 def whole_run(log, model: dict) -> tuple[float, float]:
@@ -62,59 +64,136 @@ def whole_run(log, model: dict) -> tuple[float, float]:
     return float(np.degrees(dyaw)), float(np.hypot(*(pred[0, last, :2] - seg.gt[0, last, :2])))
 
 
-def single_runs(logs) -> None:
+SCREENED = ("circular", "square")  # path types whose runs are screened and are the targets
+
+
+class Targets:
+    """The circle and square runs of every session, each dead-reckoned whole from its first
+    logged pose: the final position error a model leaves on the *other* sessions' runs."""
+
+    def __init__(self, logs) -> None:
+        runs = [log for log in logs if log.meta.data["optiodom"]["path_type"] in SCREENED]
+        arrays = [log_arrays(log) for log in runs]
+        spans = []
+        for li, arr in enumerate(arrays):
+            ok = np.flatnonzero(arr["gt_ok"])
+            spans.append((li, int(ok[0]), int(ok[-1]) + 1))
+        self.seg = cut_spans(arrays, runs, spans)
+        self.session = np.array([log.meta.data["optiodom"]["session"] for log in runs])
+        self.last = np.array([np.flatnonzero(row)[-1] for row in self.seg.gt_ok])
+        self.nominal = self.end_errors({})
+
+    def end_errors(self, model: dict) -> np.ndarray:
+        pred = simulate(self.seg, model)
+        i = np.arange(len(self.seg))
+        return np.hypot(*(pred[i, self.last, :2] - self.seg.gt[i, self.last, :2]).T)
+
+    def cut(self, model: dict, session: str) -> tuple[float, float, float]:
+        """(nominal mean final error [m], with ``model`` [m], relative cut) over the runs of
+        the sessions other than ``session``."""
+        other = self.session != session
+        before = float(self.nominal[other].mean())
+        after = float(self.end_errors(model)[other].mean()) if model else before
+        return before, after, 1.0 - after / before
+
+
+def oracle(runs, effects: tuple[str, ...] = ("track_width",)) -> dict:
+    """``effects`` fitted on the whole dead-reckoned paths of ``runs`` (each run replayed whole
+    from its first logged pose): the best such a fit does on the same data."""
+    arrays = [log_arrays(log) for log in runs]
+    spans = [(li, int(np.flatnonzero(a["gt_ok"])[0]), int(np.flatnonzero(a["gt_ok"])[-1]) + 1)
+             for li, a in enumerate(arrays)]
+    parts = cut_spans(arrays, runs, spans)
+    short = Problem.from_segments(build_segments(runs))
+    return fit(Problem(parts, short.heading_scale_m, short.travel_m), effects).params
+
+
+def half_drifts(log) -> tuple[float, float, float]:
+    """Nominal heading drift [deg] at the end of the whole run and of each half, each
+    dead-reckoned from its own first logged pose."""
+    arr = log_arrays(log)
+    ok = np.flatnonzero(arr["gt_ok"])
+    mid = int(ok[ok.size // 2])
+    spans = [(0, int(ok[0]), int(ok[-1]) + 1), (0, int(ok[0]), mid + 1),
+             (0, mid, int(ok[-1]) + 1)]
+    seg = cut_spans([arr], [log], spans)
+    pred = simulate(seg, {})
+    out = []
+    for k in range(3):
+        last = np.flatnonzero(seg.gt_ok[k])[-1]
+        out.append(float(np.degrees((pred[k, last, 2] - seg.gt[k, last, 2] + np.pi)
+                                    % (2 * np.pi) - np.pi)))
+    return out[0], out[1], out[2]
+
+
+def both_halves(log) -> tuple[bool, float]:
+    """(drift shows in both halves, whole-run drift [deg]): whole-run drift beyond
+    ``DRIFT_DEG`` and each half at least ``HALF_DRIFT_DEG`` the same way."""
+    whole, first, second = half_drifts(log)
+    ok = (abs(whole) > DRIFT_DEG and all(np.sign(h) == np.sign(whole)
+                                          and abs(h) >= HALF_DRIFT_DEG for h in (first, second)))
+    return ok, whole
+
+
+def _causes(rep: dict) -> list[str]:
+    return [c for c in [rep["cause"], *rep["also"]] if c != "none"]
+
+
+def _model(rep: dict) -> dict:
+    return parse_model(rep).effects if _causes(rep) else {}
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.0f} %"
+
+
+def single_runs(logs, targets: Targets | None = None) -> None:
     """Step 5: the single-run table and its summary."""
-    info = [log.meta.data["optiodom"] for log in logs]
-    arcs = [(log, i["session"]) for log, i in zip(logs, info, strict=True)
-            if i["path_type"] == "circular"]
-    print("\n| run | nominal heading drift [°] | cause (also) | track_width_m / radii | "
-          "turn scale c_θ | separable | other sessions' circle runs: final position error "
-          "cut |\n|---|---|---|---|---|---|---|")
-    named, total, cuts = 0, 0, []
-    per_session: dict[tuple[str, str], list] = defaultdict(lambda: [0, 0, []])
-    for log, i in zip(logs, info, strict=True):
-        if i["path_type"] not in ("circular", "square"):
+    targets = targets or Targets(logs)
+    print("\n| run | nominal heading drift [°] | cause (also) | parameters | other sessions' "
+          "circle and square runs: final error, nominal → one-run model | cut | oracle cut "
+          "(width) | oracle cut (width + radii) |\n|---|---|---|---|---|---|---|---|")
+    rows = []
+    for log in logs:
+        i = log.meta.data["optiodom"]
+        if i["path_type"] not in SCREENED:
             continue
-        drift = whole_run(log, {})[0]
-        if abs(drift) <= DRIFT_DEG:
+        ok, drift = both_halves(log)
+        if not ok:
             continue
-        total += 1
         rep, _ = diagnose([log], i["file"])
-        causes = [rep["cause"], *rep["also"]]
-        geometric = bool({"rolling_radius", "track_width"} & set(causes))
-        named += geometric
-        session = per_session[(i["path_type"], i["session"])]
-        session[0] += 1
-        session[1] += geometric
-        cal = rep.get("calibration")
-        cut = "–"
-        if cal:
-            model = parse_model(rep).effects
-            others = [lg for lg, sess in arcs if sess != i["session"]]
-            before = [whole_run(lg, {})[1] for lg in others]
-            after = [whole_run(lg, model)[1] for lg in others]
-            rel = 1.0 - np.mean(after) / np.mean(before)
-            cuts.append(rel)
-            session[2].append(rel)
-            cut = f"{1e3 * np.mean(before):.0f} → {1e3 * np.mean(after):.0f} mm ({100 * rel:.0f} %)"
+        causes = _causes(rep)
+        before, after, rel = targets.cut(_model(rep), i["session"])
+        o_w = targets.cut(oracle([log]), i["session"])[2]
+        o_wr = targets.cut(oracle([log], ("track_width", "rolling_radius")), i["session"])[2]
+        rows.append((i["path_type"], causes, rel, o_w, o_wr))
         params = ", ".join(f"{k} = {v[0]:.4f} ± {v[1]:.4f}" for k, v in rep["parameters"].items())
-        scale = (f"{cal['determined']['turn_scale'][0]:.4f} ± "
-                 f"{cal['determined']['turn_scale'][1]:.4f}" if cal else "–")
         print(f"| {i['path_type']} {i['session']} run {i['run']} | {drift:+.1f} | "
               f"{rep['cause']}{' (' + ', '.join(rep['also']) + ')' if rep['also'] else ''} | "
-              f"{params or '–'} | {scale} | {cal['separable'] if cal else '–'} | {cut} |",
-              flush=True)
-    print(f"\n{named}/{total} single runs drifting > {DRIFT_DEG:g}° get a geometric cause; "
-          f"their models cut the other sessions' circle-run final position error by "
-          f"{100 * np.mean(cuts):.0f} % on average (median {100 * np.median(cuts):.0f} %)")
-    print("\n| session (path) | runs drifting > 3° | geometric cause named | one-run models: "
-          "other sessions' circle runs' final position error cut, mean (range) |\n"
-          "|---|---|---|---|")
-    for (path, name), (runs, hits, rels) in sorted(per_session.items(),
-                                                   key=lambda kv: kv[0][1]):
-        cut = (f"{100 * np.mean(rels):.0f} % ({100 * min(rels):.0f} to {100 * max(rels):.0f} %)"
-               if rels else "–")
-        print(f"| {name} ({path}) | {runs} | {hits} | {cut} |")
+              f"{params or '–'} | {1e3 * before:.0f} → {1e3 * after:.0f} mm | {_pct(rel)} | "
+              f"{_pct(o_w)} | {_pct(o_wr)} |", flush=True)
+    geo = {"rolling_radius", "track_width"}
+    circles = [r for r in rows if r[0] == "circular"]
+    squares = [r for r in rows if r[0] == "square"]
+    named = sum(bool(geo & set(r[1])) for r in circles)
+    other = sum(bool(set(r[1]) - geo) for r in squares)
+    sq_cut = sum(r[2] >= 0.30 for r in squares)
+    print(f"\nsingle runs whose drift shows in both halves (> {DRIFT_DEG:g}° over the run, "
+          f">= {HALF_DRIFT_DEG:g}° the same way in each half): {len(rows)}")
+    print(f"  circles named geometric: {named}/{len(circles)} (target >= 80 %)")
+    print(f"  squares with a non-geometric cause: {other}/{len(squares)} (target 0)")
+    print(f"  squares whose one-run model cuts the other sessions' error >= 30 %: "
+          f"{sq_cut}/{len(squares)} (target >= 70 %); oracle (width): "
+          f"{sum(r[3] >= 0.30 for r in squares)}/{len(squares)}, oracle (width + radii): "
+          f"{sum(r[4] >= 0.30 for r in squares)}/{len(squares)}")
+    if rows:
+        print(f"  median transfer over these runs: {_pct(np.median([r[2] for r in rows]))} "
+              f"(target >= 40 %); oracle (width) {_pct(np.median([r[3] for r in rows]))}, "
+              f"oracle (width + radii) {_pct(np.median([r[4] for r in rows]))}")
+        for path, rs in (("circle", circles), ("square", squares)):
+            if rs:
+                print(f"  {path} runs: median transfer {_pct(np.median([r[2] for r in rs]))}, "
+                      f"oracle (width) {_pct(np.median([r[3] for r in rs]))}")
 
 
 def arc_fraction(logs) -> float:
@@ -134,83 +213,52 @@ def arc_fraction(logs) -> float:
     return arc / max(total, 1e-12)
 
 
-def determined_for_arcs(rep: dict, arcs: float) -> tuple[dict, str]:
-    """The part of a session's geometric model that its runs determine for arc runs.
-
-    The turn scale c_θ a session determines is that of the turns it drove: a session turning
-    on the spot (``arcs`` < 0.5: pivot turns scrub the castors and turn about a point off the
-    axle midpoint) does not determine the turn scale of arcs, only the distance scale c_d
-    (its straights). Its model is applied as c_d on both wheel radii (turn scale nominal);
-    any other model is applied whole.
-    """
-    model = parse_model(rep).effects
-    cal = rep.get("calibration")
-    if arcs >= 0.5 or not cal:
-        return model, "whole model"
-    c_d, se = cal["determined"]["distance_scale"]
-    if not determined(c_d - 1.0, se):
-        return {}, f"c_d = {c_d:.4f} ± {se:.4f} not determined: nominal"
-    r = c_d * cal["nominal"]["wheel_radius_m"]
-    return ({"rolling_radius": RollingRadius(r, r)},
-            f"c_d = {c_d:.4f} ± {se:.4f} only (turn scale nominal)")
-
-
-def session_models(logs) -> None:
-    """Step 6: each session's model applied to the other sessions' circle runs, whole and
-    as far as the session determines it for arcs (:func:`determined_for_arcs`)."""
+def session_models(logs, targets: Targets | None = None) -> None:
+    """Step 6: each session's model applied to the other sessions' circle and square runs,
+    dead-reckoned whole, beside the oracle (the width, and the width and radii, fitted on the
+    whole paths of the session's runs)."""
+    targets = targets or Targets(logs)
     sessions = defaultdict(list)
     for log in logs:
         sessions[log.meta.data["optiodom"]["session"]].append(log)
-    arcs = [(log, log.meta.data["optiodom"]["session"]) for log in logs
-            if log.meta.data["optiodom"]["path_type"] == "circular"]
-    print("\n| session fitted on | runs | turned on arcs | cause (also) | parameters | "
-          "determined (c_θ, c_d) | other sessions' circle runs | final position error, "
-          "nominal → fitted [mm] | cut | determined part applied | cut |\n"
-          "|---|---|---|---|---|---|---|---|---|---|---|")
-    cuts, cuts_det = [], []
-    by_path: dict[str, list[float]] = defaultdict(list)
+    print("\n| session fitted on | path | runs | turned on arcs | cause (also) | parameters | "
+          "transfer inside the session (held-out error ratio) | other sessions' circle and "
+          "square runs: final error, nominal → session model | cut | oracle cut (width) | "
+          "oracle cut (width + radii) |\n|---|---|---|---|---|---|---|---|---|---|---|")
+    rows = []
     for name, runs in sorted(sessions.items()):
+        path = runs[0].meta.data["optiodom"]["path_type"]
         try:
             rep, _ = diagnose(runs, name)
         except ValueError as exc:
-            print(f"| {name} | {len(runs)} | | not diagnosed: {exc} | | | | | | | |")
+            print(f"| {name} | {path} | {len(runs)} | | not diagnosed: {exc} | | | | | | |")
             continue
-        others = [lg for lg, sess in arcs if sess != name]
-        causes = [c for c in [rep["cause"], *rep["also"]] if c != "none"]
+        before, after, rel = targets.cut(_model(rep), name)
+        o_w = targets.cut(oracle(runs), name)[2]
+        o_wr = targets.cut(oracle(runs, ("track_width", "rolling_radius")), name)[2]
+        rows.append((name, path, rel, o_w, o_wr))
         params = ", ".join(f"{k} = {v[0]:.4f} ± {v[1]:.4f}" for k, v in rep["parameters"].items())
-        share = arc_fraction(runs)
-        if not causes or not others:
-            print(f"| {name} | {len(runs)} | {100 * share:.0f} % | {rep['cause']} | – | – | "
-                  f"{len(others)} | – | – | – | – |")
-            continue
-        cal = rep.get("calibration")
-        det = ("; ".join(f"{k} {v[0]:.4f} ± {v[1]:.4f}" for k, v in cal["determined"].items())
-               if cal else "–")
-        before = np.mean([whole_run(lg, {})[1] for lg in others])
-        after = np.mean([whole_run(lg, parse_model(rep).effects)[1] for lg in others])
-        model, how = determined_for_arcs(rep, share)
-        after_det = np.mean([whole_run(lg, model)[1] for lg in others])
-        rel, rel_det = 1.0 - after / before, 1.0 - after_det / before
-        cuts.append(rel)
-        cuts_det.append(rel_det)
-        by_path[runs[0].meta.data["optiodom"]["path_type"]].append(rel)
-        print(f"| {name} | {len(runs)} | {100 * share:.0f} % | {rep['cause']}"
-              f"{' (' + ', '.join(rep['also']) + ')' if rep['also'] else ''} | {params} | "
-              f"{det} | {len(others)} | {1e3 * before:.0f} → {1e3 * after:.0f} | "
-              f"{100 * rel:.0f} % | {how}: {1e3 * after_det:.0f} mm | {100 * rel_det:.0f} % |",
-              flush=True)
-    if cuts:
-        print(f"\nsession models cut the other sessions' circle-run final position error by "
-              f"{100 * np.mean(cuts):.0f} % on average (min {100 * np.min(cuts):.0f} %, "
-              f"{len(cuts)} sessions with a cause); applied as far as determined for arcs: "
-              f"{100 * np.mean(cuts_det):.0f} % (min {100 * np.min(cuts_det):.0f} %)")
-        counts = defaultdict(int)
-        for runs in sessions.values():
-            counts[runs[0].meta.data["optiodom"]["path_type"]] += 1
-        for path, rel in sorted(by_path.items()):
-            print(f"  {path} sessions: {len(rel)} of {counts[path]} name a cause; their models "
-                  f"cut it by {100 * np.mean(rel):.0f} % on average (min "
-                  f"{100 * np.min(rel):.0f} %, max {100 * np.max(rel):.0f} %)")
+        tr = rep.get("transfer") or {}
+        inside = "; ".join(f"{'+'.join(t['effects'])} {t['error_ratio']:.2f}"
+                           + (" (worse on a part)" if t["makes_a_part_worse"] else "")
+                           for t in tr.get("tested", []))
+        print(f"| {name} | {path} | {len(runs)} | {_pct(arc_fraction(runs))} | {rep['cause']}"
+              f"{' (' + ', '.join(rep['also']) + ')' if rep['also'] else ''} | "
+              f"{params or '–'} | {inside or '–'} | {1e3 * before:.0f} → {1e3 * after:.0f} mm | "
+              f"{_pct(rel)} | {_pct(o_w)} | {_pct(o_wr)} |", flush=True)
+    if not rows:
+        return
+    hit = sum(r[2] >= 0.5 for r in rows)
+    print(f"\nsession models cutting the other sessions' circle and square final error by "
+          f">= 50 %: {hit}/{len(rows)} sessions (target >= 80 %); oracle (width) "
+          f"{sum(r[3] >= 0.5 for r in rows)}/{len(rows)}, oracle (width + radii) "
+          f"{sum(r[4] >= 0.5 for r in rows)}/{len(rows)}")
+    for path in sorted({r[1] for r in rows}):
+        rs = [r for r in rows if r[1] == path]
+        print(f"  {path} sessions: {sum(r[2] >= 0.5 for r in rs)}/{len(rs)}, median cut "
+              f"{_pct(np.median([r[2] for r in rs]))} (oracle width "
+              f"{_pct(np.median([r[3] for r in rs]))}, width + radii "
+              f"{_pct(np.median([r[4] for r in rs]))})")
 
 
 def position_rmse(seg, params: dict) -> float:
@@ -314,7 +362,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pivots", action="store_true",
                         help="only the square runs' pivot-turn measurements")
     parser.add_argument("--sessions", action="store_true",
-                        help="only the whole-session models on other sessions' circle runs")
+                        help="only the whole-session models on the other sessions' runs")
+    parser.add_argument("--transfer", action="store_true",
+                        help="only the session and single-run transfer tables (steps 5, 6)")
     args = parser.parse_args(argv)
     out = Path(args.out)
     convert_real_datasets(out, progress=False)
@@ -324,6 +374,11 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.sessions:
         session_models(logs)
+        return 0
+    if args.transfer:
+        targets = Targets(logs)
+        session_models(logs, targets)
+        single_runs(logs, targets)
         return 0
     if args.pivots:
         pivots(logs)
@@ -362,8 +417,9 @@ def main(argv: list[str] | None = None) -> int:
             p = ", ".join(f"{k} = {v[0]:.4f} ± {v[1]:.4f}" for k, v in params.items())
             print(f"| {name} | {n_train} | {n_test} | {p} | {1e3 * before:.1f} → "
                   f"{1e3 * after:.1f} ({100 * (1 - after / before):.0f} %) |")
-    single_runs(logs)
-    session_models(logs)
+    targets = Targets(logs)
+    single_runs(logs, targets)
+    session_models(logs, targets)
     boreal = load_logs(out / "borealtc", require_ground_truth=False)
     result = proprio.analyse(boreal, str(out / "borealtc"))
     (out / "borealtc_diagnosis.json").write_text(json.dumps(result, indent=2, default=float))

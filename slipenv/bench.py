@@ -47,19 +47,27 @@ Three more figures per env:
   compiled loop.
 * ``vec_env_steps_per_s``: total env steps/s of ``gymnasium.make_vec(id, VEC_PROCESSES,
   vectorization_mode="async")`` (one env per process, constant action, after a warm-up).
+* ``track_model_vs_per_wheel`` (tracked vehicles only, :func:`track_model_cost`): the same env
+  with the vehicle's track model switched, the Wong-Chiang track model
+  (``track_model="wong_chiang"``, `slipenv.sim.track_soil`) against the per-road-wheel law
+  (``"per_wheel"``, the compiled wheel loop), in CPU microseconds per env step, the two envs'
+  steps alternating one by one in this process; ``ratio`` (track model / per-wheel) is the
+  median of the repetitions' ratios. Printed as "track model / per-wheel".
 
 And once per run, ``startup``: what a user waits for before the first step, each env in a
 fresh interpreter (:func:`startup_cost`): ``import slipenv`` (median over the envs) and per env
 the first ``make`` + ``reset`` + ``step``, and which compiled kernels were loaded (the wheel-soil
-loop, ``slipenv.sim.compiled``; the Lindgren EKF, ``slipenv.estimators.lindgren``). ``pip
-install`` builds the C kernels; numba compiles the Lindgren EKF once, on its first use after an
-install or an edit of its source, and caches it on disk: the start-up figures are taken with
-that cache warm (the run builds one filter first, `warm_up`).
+loop, ``slipenv.sim.compiled``; the Lindgren EKF, ``slipenv.estimators.lindgren``; the track
+model, ``slipenv.terramechanics.track``). ``pip install`` builds the C kernels; numba compiles
+the Lindgren EKF and the track model once, on their first use after an install or an edit of
+their source, and caches them on disk: the start-up figures are taken with that cache warm (the
+run compiles or loads both first, `warm_up`).
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import logging
 import platform
@@ -75,7 +83,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from slipenv.estimators.lindgren.ekf import warm_up
+from slipenv.envs.compiled import warm_up
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.rollout import rollout
 
@@ -173,12 +181,64 @@ def bench_env(env_id: str, steps: int = 200, repeats: int = 5, vec: bool = True)
         result["breakdown_us_per_step"], parts = step_breakdown_and_parts(env, steps)
         result["injection_parts_us_per_substep"] = parts
         result["pybullet_path"] = paths.pop() if len(paths) == 1 else "mixed"
+        tracked = base.vehicle.track_length_m is not None
     finally:
         env.close()
+    if tracked:
+        result["track_model_vs_per_wheel"] = track_model_cost(env_id, steps, repeats)
     if vec:
         result["vec_processes"] = VEC_PROCESSES
         result["vec_env_steps_per_s"] = round(vec_steps_per_s(env_id, VEC_PROCESSES, steps), 1)
     return result
+
+
+def track_model_cost(env_id: str, steps: int = 200, repeats: int = 5) -> dict:
+    """µs per env step of ``env_id`` with its tracked vehicle on the Wong-Chiang track model
+    and on the per-road-wheel law (module docstring).
+
+    Both envs run side by side from ``reset(seed=0)`` with the bench action, their steps
+    alternating one by one after ``WARMUP_STEPS`` untimed steps each; an episode that ends is
+    reset untimed and goes on. Each step is timed in CPU time of this thread
+    (``time.thread_time``: PyBullet's DIRECT client steps in the caller's thread), so other
+    processes sharing the machine do not enter the ratio.
+
+    Returns
+    -------
+    dict
+        ``{"per_wheel_us_per_step", "track_model_us_per_step", "ratio"}``, medians over the
+        repetitions; ratio = track model / per-wheel, the median of the repetitions' ratios.
+    """
+    if steps < 1 or repeats < 1:
+        raise ValueError(f"steps and repeats must be >= 1, got steps={steps}, repeats={repeats}")
+    probe = gym.make(env_id)
+    spec = probe.unwrapped.vehicle  # type: ignore[attr-defined]
+    probe.close()
+    models = ("per_wheel", "wong_chiang")
+    envs = [gym.make(env_id, vehicle=dataclasses.replace(spec, track_model=m)) for m in models]
+    clock = time.thread_time
+    try:
+        us: list[list[float]] = [[], []]
+        for _ in range(repeats):
+            elapsed = [0.0, 0.0]
+            for env in envs:
+                env.reset(seed=0)
+            for i in range(WARMUP_STEPS + steps):
+                for k, env in enumerate(envs):
+                    t0 = clock()
+                    _, _, terminated, truncated, _ = env.step(BENCH_ACTION)
+                    if i >= WARMUP_STEPS:
+                        elapsed[k] += clock() - t0
+                    if terminated or truncated:
+                        env.reset(seed=0)
+            for k in range(2):
+                us[k].append(1e6 * elapsed[k] / steps)
+    finally:
+        for env in envs:
+            env.close()
+    ratios = [t / w for w, t in zip(us[0], us[1], strict=True)]
+    return {"per_wheel_us_per_step": round(statistics.median(us[0]), 1),
+            "track_model_us_per_step": round(statistics.median(us[1]), 1),
+            "ratio": round(statistics.median(ratios), 3)}
 
 
 # -- PyBullet's own Coulomb friction on the same world ----------------------------------------
@@ -459,7 +519,8 @@ env.close()
 from slipenv.estimators.lindgren.ekf import compiled_available
 from slipenv.sim.compiled import wheel_loop_module
 print(json.dumps({"import_s": t1 - t0, "first_make_s": t2 - t1, "compiled": {
-    "wheel_loop": wheel_loop_module() is not None, "lindgren_ekf": compiled_available()}}))
+    "wheel_loop": wheel_loop_module() is not None, "lindgren_ekf": compiled_available(),
+    "track_model": compiled_available()}}))
 """
 
 
@@ -492,8 +553,8 @@ def run_bench(env_ids: list[str], steps: int = 200, repeats: int = 5,
         ``{"envs": {id: {...}}, "machine": {...}, "settings": {...},
         "warnings": {"count": n, "messages": {message: count}}}``.
     """
-    # Compile (or load) the Lindgren EKF here, before any timing and before the fresh
-    # interpreters and vector-env workers start, so none of them compiles it.
+    # Compile (or load) the Lindgren EKF and the track model here, before any timing and before
+    # the fresh interpreters and vector-env workers start, so none of them compiles them.
     warm_up()
     envs = {}
     iterator = env_ids
@@ -554,6 +615,15 @@ def format_bench(result: dict) -> str:
         for env_id, q in parts:
             lines.append(f"{env_id:<32} {q['read']:>10.2f} {q['force_law']:>10.2f} "
                          f"{q['apply']:>10.2f}")
+    tracks = [(env_id, r["track_model_vs_per_wheel"]) for env_id, r in result["envs"].items()
+              if r.get("track_model_vs_per_wheel")]
+    if tracks:
+        lines.append("")
+        for env_id, t in tracks:
+            lines.append(f"track model / per-wheel, {env_id}: {t['ratio']:.2f} "
+                         f"({t['track_model_us_per_step']:.0f} against "
+                         f"{t['per_wheel_us_per_step']:.0f} CPU us per env step, "
+                         "steps interleaved)")
     start = result.get("startup")
     if start:
         slowest = max(start["first_make_s"].items(), key=lambda kv: kv[1])

@@ -224,12 +224,11 @@ def add_reproduce(sub: SubParsers) -> argparse.ArgumentParser:
                         "DIR/yamauchi_<world>.md)")
     p.add_argument("--vehicle", type=tracked_vehicle_name, default=None,
                    help="yamauchi: run on this tracked vehicle preset (None: "
-                        "tracked_patako_wong_chiang, the Wong-Chiang track model; "
-                        "tracked_patako: the env's per-wheel law)")
+                        "tracked_patako_wong_chiang, the Wong-Chiang track model, the env's; "
+                        "tracked_patako: the per-wheel law)")
     p.add_argument("--soil", type=soil_name, default=None,
-                   help="yamauchi: run on this soil preset (None: dry_sand; toyoura_sand: "
-                        "the env's; --vehicle tracked_patako --soil toyoura_sand is the env's "
-                        "world, the one --save-model needs)")
+                   help="yamauchi: run on this soil preset (None: toyoura_sand, the env's; "
+                        "that world is the one --save-model needs)")
     return p
 
 
@@ -250,8 +249,8 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         soil = args.soil if args.soil is not None else REPRODUCTION_SOIL
         if not is_env_world(vehicle, soil):
             raise ValueError("--save-model writes the model the env observes with, fitted in "
-                             "the env's own world: add --vehicle tracked_patako --soil "
-                             f"toyoura_sand (this run's world: {vehicle} on {soil})")
+                             "the env's own world: drop --vehicle/--soil (this run's world: "
+                             f"{vehicle} on {soil})")
     out_dir = output_dir(_fill(args.out, name=args.name), "--out")
     json_path = output_file(args.json, "--json")
     output_file(args.save_model, "--save-model")

@@ -128,12 +128,15 @@ def run_episode(env_id: str, seed: int = 0, controller: str = "yamauchi",
 
             base = env.unwrapped
             assert isinstance(base, SlipEnv)  # baseline_controller has checked it
-            if "lindgren" in base.config.estimator:
-                # Otherwise the first step stalls silently while numba compiles the filter.
-                from slipenv.estimators.lindgren.ekf import warm_up
+            compiled = [name for name, used in (
+                ("the Lindgren EKF", "lindgren" in base.config.estimator),
+                ("the track model", base.vehicle.track_model == "wong_chiang")) if used]
+            if compiled:
+                # Otherwise the first step stalls silently while numba compiles them.
+                from slipenv.envs.compiled import warm_up
 
-                print("preparing the Lindgren EKF (numba compiles it on the first run after an "
-                      "install, about 15 s; later runs load it from the cache)",
+                print(f"preparing {' and '.join(compiled)} (numba compiles on the first run "
+                      "after an install, 15-30 s; later runs load from the cache)",
                       file=sys.stderr, flush=True)
                 warm_up()
             limit = None if env.spec is None else env.spec.max_episode_steps

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import logging
 import math
-from itertools import pairwise
 
 import numpy as np
 from scipy import stats
@@ -51,6 +50,7 @@ _ROUTINE_SKIPS = frozenset({"bearing_gated"})  # counted in extras['skipped'], n
 SENSORS = ("gyro", "acc", "tilt", "odo", "bearing")  # keys of LindgrenEKF.history
 _NO_BEACONS = np.zeros((0, 2))
 _NO_BEARINGS = np.zeros(0)
+_F64 = np.dtype(np.float64)
 _OUT_SENSORS = (("gyro", kernel.OUT_GYRO, 1), ("acc", kernel.OUT_ACC, 2),
                 ("tilt", kernel.OUT_TILT, 2), ("odo", kernel.OUT_ODO, 2))
 _ODO_SKIPS = {kernel.INVALID_SOIL: "odo_invalid_soil", kernel.TORQUE_NAN: "torque_nan",
@@ -83,7 +83,8 @@ def warm_up() -> None:
 
 
 class LindgrenEKF:
-    """Lindgren's navigation EKF in one of the four schemes of §5, or the oracle variant.
+    """Lindgren's navigation EKF in one of the four schemes of §5, scheme 5 (Okello's curve in
+    place of the linear torque/slip law), or the oracle variant.
 
     Parameters
     ----------
@@ -91,9 +92,11 @@ class LindgrenEKF:
         Nominal radius R_w, track width W, encoder resolution 1/Γ and the left/right wheel
         groups (counts and torques are averaged within a group).
     scheme : int or str
-        1 "laser_inertial", 2 "odometry_only", 3 "all_no_slip", 4 "all_slip".
+        1 "laser_inertial", 2 "odometry_only", 3 "all_no_slip", 4 "all_slip",
+        5 "all_slip_okello".
     params : LindgrenNoise, optional
-        Noise, prior and gating parameters; the paper's variances by default.
+        Noise, prior and gating parameters; the paper's variances by default. With
+        ``lateral_slip_sigma0 > 0`` the state gains the lateral slip gain k_β (any scheme).
     beacons_xy : np.ndarray, shape (m, 2), optional
         Surveyed beacon positions [m]. Required by scheme 1; without it, bearings are skipped.
     oracle : OracleSoil, optional
@@ -103,7 +106,8 @@ class LindgrenEKF:
     Attributes
     ----------
     x : np.ndarray, shape (n,)
-        State, n = 13 for scheme 4 (R_w, k_s estimated), else 9.
+        State (layout in :mod:`.models`): n = 13 for scheme 4 (R_w, k_s estimated), 15 for
+        scheme 5 (R_w, k_s, 1/B), else 9; one more with the lateral slip gain k_β (last).
     P : np.ndarray, shape (n, n)
         State covariance.
     history : dict[str, list[tuple[float, np.ndarray, np.ndarray]]]
@@ -146,11 +150,17 @@ class LindgrenEKF:
         elif self.scheme == Scheme.LASER_INERTIAL:
             raise ValueError("scheme 1 (laser_inertial) needs beacons_xy")
         self.beacons_xy = beacons_xy
-        self.slip_model = self.scheme == Scheme.ALL_SLIP
+        self.slip_model = self.scheme in (Scheme.ALL_SLIP, Scheme.ALL_SLIP_OKELLO)
         self.estimates_soil = self.slip_model and oracle is None
         self.uses_odometry = self.scheme != Scheme.LASER_INERTIAL
         self.uses_exteroceptive = self.scheme != Scheme.ODOMETRY_ONLY
-        self.n = lm.N_SLIP if self.estimates_soil else lm.N_BASE
+        self.lateral_slip = self.params.lateral_slip_sigma0 > 0.0
+        if self.scheme == Scheme.ALL_SLIP_OKELLO:
+            n_soil = lm.N_OKELLO
+        else:
+            n_soil = lm.N_SLIP if self.estimates_soil else lm.N_BASE
+        self.n = n_soil + self.lateral_slip
+        self.state_names = lm.state_names(self.n)
         p = self.params
         cfg = np.empty(kernel.N_CFG)
         cfg[[kernel.C_JERK_V, kernel.C_JERK_W, kernel.C_TILT_PSD, kernel.C_RADIUS_VAR,
@@ -164,6 +174,8 @@ class LindgrenEKF:
         cfg[[kernel.C_TRACK, kernel.C_CPR, kernel.C_RADIUS]] = (
             geometry.track_width_m, geometry.counts_per_rad, geometry.wheel_radius_m)
         cfg[kernel.C_MAX_SLIP] = p.max_slip
+        cfg[kernel.C_B_VAR] = p.inv_shape_var_per_m
+        cfg[kernel.C_KBETA_VAR] = p.lateral_slip_var_per_m
         self._cfg = cfg
         self._soil = lo.NO_SOIL if oracle is None else oracle.as_array()
         self._beacons = _NO_BEACONS if beacons_xy is None else np.ascontiguousarray(beacons_xy)
@@ -174,6 +186,19 @@ class LindgrenEKF:
         else:
             self._odo_mode = 1
         self._left, self._right = list(geometry.left), list(geometry.right)
+        # one wheel per side (the farm vehicle): read it directly, without averaging
+        self._single = (self._left[0], self._right[0]) if len(self._left) == len(
+            self._right) == 1 else None
+        self._min_wheels = max(self._left + self._right) + 1
+        # the lateral specific force of Eq. 14 for the estimate, the same text as the
+        # compiled one run as Python: a compiled call from Python costs more than it does
+        self._lateral_accel_g = getattr(lm.lateral_accel_g, "py_func", lm.lateral_accel_g)
+        if oracle is not None:
+            r_w, k_s = oracle.wheel_radius_m, oracle.k_s
+        else:  # only read when the soil is not estimated: the nominal radius, no slip model
+            r_w, k_s = (geometry.wheel_radius_m,) * 2, (math.nan, math.nan)
+        self._fixed_soil_extras = {"R_wl_m": float(r_w[0]), "R_wr_m": float(r_w[1]),
+                                   "k_sl": float(k_s[0]), "k_sr": float(k_s[1])}
         self._status = np.empty(8, dtype=np.int64)  # status codes of a frame's measurements
         # sensors whose status is ACCEPTED in a frame where nothing is skipped
         self._n_sensors = 3 * self.uses_exteroceptive + self.uses_odometry
@@ -204,6 +229,11 @@ class LindgrenEKF:
             x[lm.IKL:lm.IKR + 1] = p.k_s0
             sig = np.concatenate([sig, [p.radius_rel_sigma0 * g.wheel_radius_m] * 2,
                                   [p.k_s_rel_sigma0 * p.k_s0] * 2])
+        if self.scheme == Scheme.ALL_SLIP_OKELLO:
+            x[lm.IBL:lm.IBR + 1] = p.inv_shape0
+            sig = np.concatenate([sig, [p.inv_shape_sigma0] * 2])
+        if self.lateral_slip:
+            sig = np.concatenate([sig, [p.lateral_slip_sigma0]])  # k_β starts at 0
         return x, np.diag(sig**2)
 
     def reset(self, x_m: float, y_m: float, yaw_rad: float, frame: SensorFrame) -> PoseEstimate:
@@ -323,27 +353,48 @@ class LindgrenEKF:
         self.x, self.P, self._t_state = x, P, float(t_s)
 
     def estimate(self) -> PoseEstimate:
-        """The current estimate; ``extras`` holds R_w, k_s and the skip counts."""
+        """The current estimate; ``extras`` holds R_w, k_s (scheme 5: Okello's B per wheel, as
+        ``okello_Bl``, ``okello_Br``), with a lateral slip state ``k_beta_rad_per_g`` and the
+        ``slip_angle_rad`` β̂ it gives now (also the estimate's ``slip_angle_rad``), and the
+        skip counts."""
         xs = self.x.tolist()
-        r_w: tuple[float, float]  # effective rolling radius (left, right) [m]
-        k_s: tuple[float, float]  # torque/slip gradient (left, right) [torque unit]
+        extras: dict[str, object]
         if self.estimates_soil:
-            r_w, k_s = (xs[lm.IRL], xs[lm.IRR]), (xs[lm.IKL], xs[lm.IKR])
-        elif self.oracle is not None:
-            r_w, k_s = self.oracle.wheel_radius_m, self.oracle.k_s
+            extras = {"R_wl_m": xs[lm.IRL], "R_wr_m": xs[lm.IRR],
+                      "k_sl": xs[lm.IKL], "k_sr": xs[lm.IKR]}
         else:
-            r_w, k_s = (self.geometry.wheel_radius_m,) * 2, (math.nan, math.nan)
-        extras = {"R_wl_m": float(r_w[0]), "R_wr_m": float(r_w[1]),
-                  "k_sl": float(k_s[0]), "k_sr": float(k_s[1]),
-                  "n_bearings_used": self._n_bearings_used,
-                  "n_skipped": sum(self.skipped.values()), "skipped": dict(self.skipped)}
+            extras = dict(self._fixed_soil_extras)
+        slip_angle = 0.0
+        if self.n == lm.N_OKELLO or self.n == lm.N_OKELLO + 1:
+            for side, b in (("okello_Bl", xs[lm.IBL]), ("okello_Br", xs[lm.IBR])):
+                extras[side] = 1.0 / b if b != 0.0 else math.inf
+        if self.lateral_slip:
+            k_beta = xs[-1]
+            slip_angle = math.atan(k_beta * self._lateral_accel_g(xs[lm.IV], xs[lm.IOM],
+                                                                  xs[lm.IA2]))
+            extras["k_beta_rad_per_g"] = k_beta
+            extras["slip_angle_rad"] = slip_angle
+        skipped = self.skipped
+        extras["n_bearings_used"] = self._n_bearings_used
+        extras["n_skipped"] = sum(skipped.values()) if skipped else 0
+        extras["skipped"] = dict(skipped)
+        # β̂ feeds a path follower's slip-angle feed-forward (Yamauchi Eq. 10); 0 without k_β
         return PoseEstimate(xs[lm.IX], xs[lm.IY], xs[lm.ITH], speed_mps=xs[lm.IV],
-                            yaw_rate_rps=xs[lm.IOM], cov=self.P[:3, :3].copy(), extras=extras)
+                            yaw_rate_rps=xs[lm.IOM], cov=self.P[:3, :3].copy(),
+                            slip_angle_rad=slip_angle, extras=extras)
 
     # -- input validation ----------------------------------------------------------------------
     def _side_counts(self, frame: SensorFrame) -> tuple[float, float]:
         """Mean cumulative counts of the (left, right) wheel group."""
         counts = frame.enc_counts
+        single = self._single
+        if (single is not None and type(counts) is np.ndarray and counts.ndim == 1
+                and len(counts) >= self._min_wheels):
+            left, right = float(counts[single[0]]), float(counts[single[1]])
+            if not (math.isfinite(left) and math.isfinite(right)):
+                raise ValueError(f"non-finite encoder counts at t = {frame.t_s}: "
+                                 f"{[left, right]}")
+            return left, right
         idx = self._left + self._right
         if not isinstance(counts, np.ndarray) or counts.ndim != 1 or len(counts) <= max(idx):
             counts = np.asarray(counts, dtype=float)
@@ -351,16 +402,20 @@ class LindgrenEKF:
                 raise ValueError(f"enc_counts has shape {counts.shape}; the geometry needs "
                                  f"wheel indices {idx}")
         c = counts.tolist()
-        left = [float(c[i]) for i in self._left]
-        right = [float(c[i]) for i in self._right]
-        if not all(math.isfinite(v) for v in left + right):
-            raise ValueError(f"non-finite encoder counts at t = {frame.t_s}: {left + right}")
+        lefts = [float(c[i]) for i in self._left]
+        rights = [float(c[i]) for i in self._right]
+        if not all(math.isfinite(v) for v in lefts + rights):
+            raise ValueError(f"non-finite encoder counts at t = {frame.t_s}: {lefts + rights}")
         # the same left-to-right sum np.mean does for these few values
-        return sum(left) / len(left), sum(right) / len(right)
+        return sum(lefts) / len(lefts), sum(rights) / len(rights)
 
     def _side_torque(self, frame: SensorFrame) -> tuple[float, float]:
         """Mean torque of the (left, right) wheel group; NaN when the frame has none."""
         torque = frame.wheel_torque_nm
+        single = self._single
+        if (single is not None and type(torque) is np.ndarray and torque.ndim == 1
+                and len(torque) >= self._min_wheels):
+            return float(torque[single[0]]), float(torque[single[1]])
         if not isinstance(torque, np.ndarray):
             torque = np.asarray(torque, dtype=float)
         if torque.ndim != 1 or len(torque) <= max(self._left + self._right):
@@ -373,8 +428,14 @@ class LindgrenEKF:
     def _frame_bearings(self, frame: SensorFrame) -> tuple[np.ndarray, np.ndarray, int]:
         """Times and values of the finite bearings, sorted by time, and the number of
         non-finite ones."""
-        z = np.atleast_1d(np.asarray(frame.beacon_bearings_rad, dtype=float))
-        tb = np.atleast_1d(np.asarray(frame.beacon_times_s, dtype=float))
+        z, tb = frame.beacon_bearings_rad, frame.beacon_times_s
+        if (type(z) is np.ndarray and type(tb) is np.ndarray and z.dtype is _F64
+                and tb.dtype is _F64 and z.ndim == 1 and tb.shape == z.shape):
+            if z.size == 0:
+                return _NO_BEARINGS, _NO_BEARINGS, 0
+        else:
+            z = np.atleast_1d(np.asarray(z, dtype=float))
+            tb = np.atleast_1d(np.asarray(tb, dtype=float))
         if z.shape != tb.shape or z.ndim != 1:
             raise ValueError(f"beacon_bearings_rad {z.shape} and beacon_times_s {tb.shape} "
                              "must be 1-D of one length")
@@ -382,9 +443,15 @@ class LindgrenEKF:
             return _NO_BEARINGS, _NO_BEARINGS, 0
         t_prev, t_now = self._t, float(frame.t_s)
         tl, zl = tb.tolist(), z.tolist()
-        if (t_prev < tl[0] and tl[-1] <= t_now and all(map(math.isfinite, zl))
-                and all(a < b for a, b in pairwise(tl))):  # the usual frame: nothing to sort
-            return tb, z, 0
+        if t_prev < tl[0] and tl[-1] <= t_now:  # the usual frame: finite, in order, in range
+            usual, last = True, t_prev
+            for t_b, z_b in zip(tl, zl, strict=True):
+                if not (t_b > last and math.isfinite(z_b)):
+                    usual = False
+                    break
+                last = t_b
+            if usual:
+                return tb, z, 0
         pairs, n_bad, late = [], 0, []
         for t_b, z_b in zip(tl, zl, strict=True):
             if not (math.isfinite(t_b) and math.isfinite(z_b)):

@@ -15,6 +15,12 @@ optimal gain ``K = P H' S⁻¹`` (Lindgren's W, Eq. 10), turns the Joseph form
 ``A = P H' L⁻ᵀ``: a symmetric rank-n_z downdate, again computed on one triangle and mirrored,
 at a third of the work of the product form.
 
+Okello's inverse shape b = 1/B (scheme 5) is physical only at b >= 0: the curve saturates
+(T -> T_max as s grows), and b < 0 would bend it the other way. Under a near-constant torque
+the odometers cannot tell a curvature from a radius, and the unconstrained filter settles on
+b < 0 with a radius off by centimetres. :func:`constrain_shape` keeps the constraint after
+every update (see there and :func:`clamp_nonnegative` for how, and why not b = exp(c)).
+
 ``NUMBA_DISABLE_JIT=1`` runs all of it as plain Python (slow, for debugging).
 """
 
@@ -25,7 +31,21 @@ import math
 import numpy as np
 from numba import njit
 
-from .models import G_MPS2, IRL, ITH, N_SLIP, process_F, process_fx, process_Q, wrap
+from .models import (
+    G_MPS2,
+    IBL,
+    IBR,
+    IKR,
+    IRL,
+    ITH,
+    N_OKELLO,
+    N_SLIP,
+    process_F,
+    process_fx,
+    process_Q,
+    soil_size,
+    wrap,
+)
 from .observations import (
     bearing_H,
     ins_H,
@@ -42,8 +62,9 @@ from .observations import (
 
 # Layout of the filter's constant configuration vector ``cfg``.
 (C_JERK_V, C_JERK_W, C_TILT_PSD, C_RADIUS_VAR, C_KS_VAR, C_R_GYRO, C_R_AX, C_R_AY, C_R_TILT,
- C_R_BEARING, C_GATE, C_R_ODO, C_TRACK, C_CPR, C_RADIUS, C_MAX_SLIP) = range(16)
-N_CFG = 16
+ C_R_BEARING, C_GATE, C_R_ODO, C_TRACK, C_CPR, C_RADIUS, C_MAX_SLIP, C_B_VAR,
+ C_KBETA_VAR) = range(18)
+N_CFG = 18
 
 # Status codes of :func:`filter_frame`, per measurement.
 ACCEPTED = 1
@@ -64,7 +85,7 @@ def predict(x: np.ndarray, P: np.ndarray, tau: float, cfg: np.ndarray) -> None:
     ``P ← F P F' + Q`` with f, F and Q of :mod:`.models`."""
     F = process_F(x, tau)
     Q = process_Q(x, tau, cfg[C_JERK_V], cfg[C_JERK_W], cfg[C_TILT_PSD], cfg[C_RADIUS_VAR],
-                  cfg[C_KS_VAR])
+                  cfg[C_KS_VAR], cfg[C_B_VAR], cfg[C_KBETA_VAR])
     xp = process_fx(x, tau)
     xp[ITH] = wrap(xp[ITH])
     n = x.shape[0]
@@ -102,9 +123,10 @@ def update(x: np.ndarray, P: np.ndarray, y: np.ndarray, H: np.ndarray, R: np.nda
     """Kalman update in place with innovation ``y`` (n_z,), Jacobian ``H`` (n_z, n) and noise
     ``R`` (n_z, n_z) (Lindgren Eq. 8-11); θ is wrapped.
 
-    Returns :data:`ACCEPTED`, writing ``S`` into ``S_out``; :data:`GATED`, changing nothing,
-    when ``y' S⁻¹ y > gate``; :data:`INVALID_SOIL`, changing nothing, when ``soil_from >= 0``
-    and the updated state has an entry <= 0 from index ``soil_from`` on (R_w, k_s).
+    Returns :data:`ACCEPTED`; :data:`GATED`, changing neither x nor P, when
+    ``y' S⁻¹ y > gate``; :data:`INVALID_SOIL`, changing neither, when ``soil_from >= 0`` and
+    the updated state would have an entry <= 0 from index ``soil_from`` to ``IKR`` (R_w, k_s).
+    ``S`` (flattened) goes into ``S_out`` in every case.
     """
     n, nz = x.shape[0], y.shape[0]
     PHt = np.zeros((n, nz))
@@ -122,16 +144,22 @@ def update(x: np.ndarray, P: np.ndarray, y: np.ndarray, H: np.ndarray, R: np.nda
     for a in range(nz):
         for b in range(a):
             S[a, b] = S[b, a] = 0.5 * (S[a, b] + S[b, a])
-    L = np.zeros((nz, nz))  # S = L L'
+    for a in range(nz):
+        for b in range(nz):
+            S_out[a * nz + b] = S[a, b]
+    # Cholesky S = L L' in place: L in the lower triangle of S (few allocations: at 20 Hz the
+    # filter runs some 350 of these small updates a second, where allocating costs as much as
+    # the arithmetic)
+    L = S
     for a in range(nz):
         for b in range(a + 1):
-            s = S[a, b]
+            s = L[a, b]
             for k in range(b):
                 s -= L[a, k] * L[b, k]
             L[a, b] = math.sqrt(s) if a == b else s / L[b, b]
-    u = np.empty(nz)  # L u = y
+    u = y.copy()  # L u = y, in place
     for a in range(nz):
-        s = y[a]
+        s = u[a]
         for k in range(a):
             s -= L[a, k] * u[k]
         u[a] = s / L[a, a]
@@ -140,30 +168,30 @@ def update(x: np.ndarray, P: np.ndarray, y: np.ndarray, H: np.ndarray, R: np.nda
         nis += u[a] * u[a]
     if nis > gate:
         return GATED
-    w = np.empty(nz)  # L' w = u: w = S⁻¹ y
+    w = u  # L' w = u: w = S⁻¹ y, in place (row a needs only the w[k] of k > a)
     for a in range(nz - 1, -1, -1):
-        s = u[a]
+        s = w[a]
         for k in range(a + 1, nz):
             s -= L[k, a] * w[k]
         w[a] = s / L[a, a]
-    xn = x.copy()
-    for i in range(n):
-        for a in range(nz):
-            xn[i] += PHt[i, a] * w[a]
-    xn[ITH] = wrap(xn[ITH])
-    if soil_from >= 0:
-        for i in range(soil_from, n):
-            if not xn[i] > 0.0:
+    if soil_from >= 0:  # the soil states must stay positive: check before changing anything
+        for i in range(soil_from, IKR + 1):
+            xi = x[i]
+            for a in range(nz):
+                xi += PHt[i, a] * w[a]
+            if not xi > 0.0:
                 return INVALID_SOIL
-    A = np.empty((n, nz))  # A = P H' L⁻ᵀ, row by row: L Aᵢ' = (P H')ᵢ'
     for i in range(n):
         for a in range(nz):
-            s = PHt[i, a]
+            x[i] += PHt[i, a] * w[a]
+    x[ITH] = wrap(x[ITH])
+    A = PHt  # A = P H' L⁻ᵀ in place, row by row: L Aᵢ' = (P H')ᵢ'
+    for i in range(n):
+        for a in range(nz):
+            s = A[i, a]
             for k in range(a):
                 s -= L[a, k] * A[i, k]
             A[i, a] = s / L[a, a]
-    for i in range(n):
-        x[i] = xn[i]
     for i in range(n):
         for j in range(i, n):
             d = P[i, j]
@@ -171,10 +199,98 @@ def update(x: np.ndarray, P: np.ndarray, y: np.ndarray, H: np.ndarray, R: np.nda
                 d -= A[i, a] * A[j, a]
             P[i, j] = d
             P[j, i] = d
-    for a in range(nz):
-        for b in range(nz):
-            S_out[a * nz + b] = S[a, b]
     return ACCEPTED
+
+
+@njit(cache=True)
+def mills_lambda(alpha: float) -> float:
+    """λ(α) = φ(α) / (1 - Φ(α)), the inverse Mills ratio of the standard normal: the shift, in
+    standard deviations, of the mean of N(0, 1) truncated to values >= α. For α > 5 by the
+    continued fraction (1 - Φ) / φ = 1 / (α + 1 / (α + 2 / (α + ...))), where 1 - Φ underflows
+    or loses its digits."""
+    if alpha <= 5.0:
+        return math.sqrt(2.0 / math.pi) * math.exp(-0.5 * alpha * alpha) / math.erfc(
+            alpha / math.sqrt(2.0))
+    cf = alpha
+    for k in range(40, 0, -1):
+        cf = alpha + k / cf
+    return cf
+
+
+@njit(cache=True)
+def clamp_nonnegative(x: np.ndarray, P: np.ndarray, i: int) -> None:
+    """Impose ``x_i >= 0`` in place on a Gaussian estimate ``N(x, P)`` with ``x_i < 0``.
+
+    The estimate moves to the mode of the density truncated to ``x_i >= 0``, the constrained
+    MAP: x_i = 0, and every other state to its conditional mean there, ``x -= P e_i μ / σ²``
+    (μ = x_i, σ² = P_ii; the estimate projection of Simon and Chia, "Kalman filtering with
+    state equality constraints", IEEE Trans. AES 38(1), 2002, for an active inequality).
+    P_ii becomes the mean square error of that estimate under the truncated density,
+    ``E[x_i² | x_i >= 0] = σ² (1 + αλ - λ² + (λ - α)²)`` with α = -μ/σ and
+    λ = :func:`mills_lambda` (α) (the truncated normal's mean μ + σλ and variance
+    σ² (1 + αλ - λ²): Johnson, Kotz and Balakrishnan, Continuous Univariate Distributions 1,
+    §13.10.1), and the rest of P shrinks with it along the regression on x_i,
+    ``P -= P e_i e_i' P (1 - E[x_i²] / σ²) / σ²``.
+
+    Why this and not the two textbook choices: projecting P too (P_ii = 0) tells the filter
+    it knows x_i exactly, so an early violation under a wide prior freezes x_i at 0 for
+    hundreds of metres; the truncated density's mean (Simon and Simon, Int. J. Systems
+    Science 41(2), 2010) puts x_i at σλ > 0, a curvature the data never showed (with the
+    prior's σ = 8, about 6). Measured on the tests' 120 s synthetic drive on Okello's curve
+    (1/B = 7, scheme 5 with k_β, bearings cut at 60 s): this finds 1/B = 5.9 / 6.3 and ends
+    1.37 m off; projecting P freezes 1/B at 0.01 / 1.2 (1.99 m); the truncated mean ends at
+    6.4 / 5.4 (1.42 m), but on the linear soil at 3.5 / 0.1 where this ends at 1.9 / 0.1.
+    Where the move would make R_w or k_s <= 0, only x_i is set (never met in the
+    reproduction's drives).
+    """
+    n = x.shape[0]
+    var = P[i, i]
+    mu = x[i]
+    if not var > 0.0:
+        x[i] = 0.0
+        return
+    sd = math.sqrt(var)
+    alpha = -mu / sd
+    lam = mills_lambda(alpha)
+    shrink = min(max(1.0 + alpha * lam - lam * lam + (lam - alpha) ** 2, 0.0), 1.0)
+    col = P[:, i].copy()
+    dmu = -mu
+    for j in range(IRL, IKR + 1):
+        if not x[j] + col[j] * dmu / var > 0.0:
+            x[i] = 0.0
+            return
+    for j in range(n):
+        x[j] += col[j] * dmu / var
+    x[i] = 0.0
+    x[ITH] = wrap(x[ITH])
+    c = (1.0 - shrink) / var
+    for a in range(n):
+        for b in range(a, n):
+            d = P[a, b] - col[a] * col[b] * c
+            P[a, b] = d
+            P[b, a] = d
+
+
+@njit(cache=True)
+def constrain_shape(x: np.ndarray, P: np.ndarray) -> None:
+    """Keep Okello's inverse shapes b = 1/B >= 0 (scheme 5; a no-op for other layouts).
+
+    An update that leaves b < 0 is followed by :func:`clamp_nonnegative`: b to 0 (the linear
+    law, the curve's limit), the states correlated with it (the radius it was trading
+    against) to their conditional means there. The second wheel's clamp moves the first
+    wheel's b by their correlation, so the left one is checked again, and a last round-off
+    below 0 is set to 0. A reparametrisation b = exp(c) or softplus(c) would keep b > 0 too,
+    but never reach the linear law the ablation world is made of: c would run off to -∞ with
+    a vanishing Jacobian, and the filter would stop learning b exactly where the data are
+    linear. The clamp keeps the linear law a reachable state and costs nothing while b > 0.
+    """
+    if soil_size(x.shape[0]) != N_OKELLO:
+        return
+    for i in (IBL, IBR, IBL):
+        if x[i] < 0.0:
+            clamp_nonnegative(x, P, i)
+    for i in (IBL, IBR):
+        x[i] = max(x[i], 0.0)
 
 
 @njit(cache=True)
@@ -211,9 +327,9 @@ def filter_frame(
     """One frame in place on ``x`` and ``P``: each bearing at its own time (predict to it,
     nearest-innovation association, χ²-gated update, Lindgren Eq. 17), predict to ``t``, then
     gyro and accelerometers (Eq. 14) and inclinometer when ``inertial``, then odometers over
-    the frame interval τ: Eq. 15 (``odo_mode`` 0), Eq. 37 (1) with R_w and k_s from the
-    13-state ``x`` or, for 9 states, the oracle's ``soil`` ``[R_wl, R_wr, k_sl, k_sr]``;
-    none (-1).
+    the frame interval τ: Eq. 15 (``odo_mode`` 0), Eq. 37 (1) with the slip model of the
+    state's layout (R_w, k_s and for 15 states Okello's 1/B from ``x``) or, for 9 states, the
+    oracle's ``soil`` ``[R_wl, R_wr, k_sl, k_sr]``; none (-1).
 
     ``status`` (m + 4,) receives a status code per bearing, then gyro, accelerometers,
     inclinometer, odometers; ``out`` (2 m + 20,) the innovation ``y`` and its ``S`` of each
@@ -233,6 +349,7 @@ def filter_frame(
         b, y1[0] = nearest_beacon(x, bearing_z[j], beacons_xy)
         R1[0, 0] = cfg[C_R_BEARING]
         status[j] = update(x, P, y1, bearing_H(x, beacons_xy[b]), R1, cfg[C_GATE], -1, S1)
+        constrain_shape(x, P)
         out[2 * j], out[2 * j + 1] = y1[0], S1[0]
     if t > t_state:
         predict(x, P, t - t_state, cfg)
@@ -246,18 +363,21 @@ def filter_frame(
             y1[0] = gyro_z - ins_hx(x)[2]
             R1[0, 0] = cfg[C_R_GYRO]
             status[m] = update(x, P, y1, ins_H(x)[2:3], R1, math.inf, -1, S1)
+            constrain_shape(x, P)
             _record(out, base + OUT_GYRO, y1, S1)
         if math.isfinite(acc_x) and math.isfinite(acc_y):  # [a1/g, a2/g]
             h = ins_hx(x)
             y = _pair(acc_x / G_MPS2 - h[0], acc_y / G_MPS2 - h[1])
             status[m + 1] = update(x, P, y, ins_H(x)[0:2], _diag2(cfg[C_R_AX], cfg[C_R_AY]),
                                    math.inf, -1, S2)
+            constrain_shape(x, P)
             _record(out, base + OUT_ACC, y, S2)
         if math.isfinite(pitch) and math.isfinite(roll):  # REP 103 -> Lindgren's α1, α2
             h = tilt_hx(x)
             y = _pair(-pitch - h[0], -roll - h[1])
             status[m + 2] = update(x, P, y, tilt_H(x), _diag2(cfg[C_R_TILT], cfg[C_R_TILT]),
                                    math.inf, -1, S2)
+            constrain_shape(x, P)
             _record(out, base + OUT_TILT, y, S2)
     if odo_mode < 0:
         return t_state
@@ -273,13 +393,14 @@ def filter_frame(
             return t_state
         T = _pair(torque_l, torque_r)
         s = wheel_slip(x, tau, T, W, soil)
-        h = odo_slip_hx(x, tau, T, W, cpr, soil)
-        H = odo_slip_H(x, tau, T, W, cpr, soil)
-        soil_from = IRL if x.shape[0] == N_SLIP else -1
         if abs(s[0]) >= cfg[C_MAX_SLIP] or abs(s[1]) >= cfg[C_MAX_SLIP]:
             status[m + 3] = SLIP_OUT_OF_RANGE  # Eq. 24 is a small-slip model
             return t_state
+        h = odo_slip_hx(x, tau, T, W, cpr, soil)
+        H = odo_slip_H(x, tau, T, W, cpr, soil)
+        soil_from = IRL if soil_size(x.shape[0]) >= N_SLIP else -1
     y = _pair(dcount_l - h[0], dcount_r - h[1])
     status[m + 3] = update(x, P, y, H, R_odo, math.inf, soil_from, S2)
+    constrain_shape(x, P)
     _record(out, base + OUT_ODO, y, S2)
     return t_state

@@ -23,6 +23,20 @@ State (Lindgren Eq. 12, extended for the slip-aware model of §4)::
     10     R_wr    m         effective rolling radius, right wheel     } model only
     11     k_sl    T units   torque/slip gradient, left  (T = k_s s)   } (13 states)
     12     k_sr    T units   torque/slip gradient, right               }
+    13     b_l     -         inverse Okello shape 1/B, left           } Okello's curve
+    14     b_r     -         inverse Okello shape 1/B, right          } (scheme 5, 15 states)
+    last   k_β     rad/g     lateral slip gain, tan β = k_β a_y        optional, any scheme
+
+The lateral slip gain is the one state beyond the paper's that any layout may carry, always as
+the last entry (n = 10, 14 or 16): the body's velocity at the reference point leans by the
+slip angle β off the heading, ``tan β = k_β a_y``, where ``a_y = v Ω / g - α2`` is the
+lateral specific force (Eq. 14's predicted lateral accelerometer reading, in g). The side force
+the tyres carry is m a_y; a linear side-force/slip-angle law (the small-slip limit of the same
+Janosi shear that gives Eq. 24 longitudinally) makes β proportional to it, so one gain describes
+both turn directions and any radius or speed, where a random-walk β would lag behind every
+change of turn. It is estimated like k_s: random walk with variance growing with distance.
+Without it (the paper's model) the filter explains a crab by a heading bias, which the bearings
+then turn into a position bias across the track.
 
 The signs of α1 and α2 are the ones that make Eq. 14 hold for a specific-force accelerometer:
 nose-up pitch adds +g α1 to the forward reading, right-side-up roll adds -g α2 to the
@@ -62,10 +76,35 @@ G_MPS2 = 9.80665  # standard gravity [m/s²]; Eq. 14 accelerations are in units 
 
 IX, IY, ITH, IV, IOM, IVD, IOMD, IA1, IA2 = range(9)
 IRL, IRR, IKL, IKR = 9, 10, 11, 12
+IBL, IBR = 13, 14
 N_BASE = 9  # the paper's state, Eq. 12
 N_SLIP = 13  # plus R_w and k_s per wheel, §4
+N_OKELLO = 15  # plus Okello's inverse shape 1/B per wheel (Eq. 18-20)
 STATE_NAMES = ("x", "y", "theta", "v", "omega", "v_dot", "omega_dot", "alpha1", "alpha2",
-               "R_wl", "R_wr", "k_sl", "k_sr")
+               "R_wl", "R_wr", "k_sl", "k_sr", "b_l", "b_r")
+LATERAL_NAME = "k_beta"
+
+
+@njit(cache=True)
+def lateral_index(n: int) -> int:
+    """Index of the lateral slip gain k_β in a state of length n, or -1 when it has none."""
+    if n == N_BASE + 1 or n == N_SLIP + 1 or n == N_OKELLO + 1:
+        return n - 1
+    return -1
+
+
+@njit(cache=True)
+def soil_size(n: int) -> int:
+    """Length of the state without its lateral slip gain: N_BASE, N_SLIP or N_OKELLO."""
+    return n - 1 if lateral_index(n) >= 0 else n
+
+
+def state_names(n: int) -> tuple[str, ...]:
+    """Names of the entries of a state of length n (one of 9, 10, 13, 14, 15, 16)."""
+    base = soil_size(n)
+    if base not in (N_BASE, N_SLIP, N_OKELLO):
+        raise ValueError(f"no Lindgren state layout has {n} entries")
+    return STATE_NAMES[:base] + ((LATERAL_NAME,) if base != n else ())
 
 
 # the contracts' angle wrap to (-π, π], compiled for the filter's compiled code
@@ -103,12 +142,23 @@ class OracleSoil:
 # Process model (Eq. 13) and process noise
 # ---------------------------------------------------------------------------------------------
 @njit(cache=True)
+def lateral_accel_g(v: float, omega: float, alpha2: float) -> float:
+    """Lateral specific force ``a_y = v Ω / g - α2`` [g] (Lindgren Eq. 14, second row)."""
+    return v * omega / G_MPS2 - alpha2
+
+
+@njit(cache=True)
 def process_fx(x: np.ndarray, tau: float) -> np.ndarray:
     """Predict the state τ seconds ahead (Lindgren Eq. 13, second-order integration).
 
+    With a lateral slip gain k_β (the last entry of a 10, 14 or 16-state ``x``) the velocity
+    leans off the heading by β, ``tan β = k_β a_y`` (:func:`lateral_accel_g`): the position
+    moves by ``τ v̄ (cos θm - tan β sin θm, sin θm + tan β cos θm)``, v being the forward
+    (body x) speed the odometers see. β is evaluated at the interval's mean speed and yaw rate.
+
     Parameters
     ----------
-    x : np.ndarray, shape (n,), n = 9 or 13
+    x : np.ndarray, shape (n,), n = 9, 13 or 15, plus one with a lateral slip gain
         State at the start of the interval (layout in the module docstring).
     tau : float
         Prediction interval [s].
@@ -117,21 +167,29 @@ def process_fx(x: np.ndarray, tau: float) -> np.ndarray:
     -------
     np.ndarray, shape (n,)
         State at the end of the interval. θ is not wrapped (the filter wraps it), so the
-        function stays smooth for finite differences. R_w and k_s are constant.
+        function stays smooth for finite differences. R_w, k_s, 1/B and k_β are constant.
     """
     xp = x.copy()
     v_bar = x[IV] + 0.5 * tau * x[IVD]  # mean speed over the interval [m/s]
-    dth = tau * (x[IOM] + 0.5 * tau * x[IOMD])  # heading change [rad]
+    om_bar = x[IOM] + 0.5 * tau * x[IOMD]  # mean yaw rate [rad/s]
+    dth = tau * om_bar  # heading change [rad]
     th_mid = x[ITH] + 0.5 * dth
-    xp[IX] = x[IX] + tau * v_bar * math.cos(th_mid)
-    xp[IY] = x[IY] + tau * v_bar * math.sin(th_mid)
+    c, s = math.cos(th_mid), math.sin(th_mid)
+    il = lateral_index(x.shape[0])
+    if il >= 0:
+        tb = x[il] * lateral_accel_g(v_bar, om_bar, x[IA2])  # tan β
+        xp[IX] = x[IX] + tau * v_bar * (c - tb * s)
+        xp[IY] = x[IY] + tau * v_bar * (s + tb * c)
+    else:
+        xp[IX] = x[IX] + tau * v_bar * c
+        xp[IY] = x[IY] + tau * v_bar * s
     xp[ITH] = x[ITH] + dth
     xp[IV] = x[IV] + tau * x[IVD]
     xp[IOM] = x[IOM] + tau * x[IOMD]
     # a fixed ground tilt seen from a yawing body: (α1, α2) turn through the heading change
-    c, s = math.cos(dth), math.sin(dth)
-    xp[IA1] = c * x[IA1] - s * x[IA2]
-    xp[IA2] = s * x[IA1] + c * x[IA2]
+    cd, sd = math.cos(dth), math.sin(dth)
+    xp[IA1] = cd * x[IA1] - sd * x[IA2]
+    xp[IA2] = sd * x[IA1] + cd * x[IA2]
     return xp
 
 
@@ -141,20 +199,43 @@ def process_F(x: np.ndarray, tau: float) -> np.ndarray:
     n = x.shape[0]
     F = np.eye(n)
     v_bar = x[IV] + 0.5 * tau * x[IVD]
-    dth = tau * (x[IOM] + 0.5 * tau * x[IOMD])
+    om_bar = x[IOM] + 0.5 * tau * x[IOMD]
+    dth = tau * om_bar
     th_mid = x[ITH] + 0.5 * dth
     c, s = math.cos(th_mid), math.sin(th_mid)
-    # x' = x + τ v̄ cos θm with v̄ = v + τ v̇/2, θm = θ + τ Ω/2 + τ² Ω̇/4
-    F[IX, ITH] = -tau * v_bar * s
-    F[IX, IV] = tau * c
-    F[IX, IVD] = 0.5 * tau * tau * c
-    F[IX, IOM] = -tau * v_bar * s * 0.5 * tau
-    F[IX, IOMD] = -tau * v_bar * s * 0.25 * tau * tau
-    F[IY, ITH] = tau * v_bar * c
-    F[IY, IV] = tau * s
-    F[IY, IVD] = 0.5 * tau * tau * s
-    F[IY, IOM] = tau * v_bar * c * 0.5 * tau
-    F[IY, IOMD] = tau * v_bar * c * 0.25 * tau * tau
+    il = lateral_index(n)
+    p = tau * v_bar
+    # x' = x + τ v̄ (cos θm - t sin θm), y' = y + τ v̄ (sin θm + t cos θm), t = tan β,
+    # v̄ = v + τ v̇/2, Ω̄ = Ω + τ Ω̇/2, θm = θ + τ Ω̄/2
+    if il >= 0:
+        a_y = lateral_accel_g(v_bar, om_bar, x[IA2])
+        tb = x[il] * a_y
+        ux, uy = c - tb * s, s + tb * c  # direction of travel (unnormalised)
+        dux, duy = -s - tb * c, c - tb * s  # its derivative with respect to θm
+        # derivatives of t with respect to v̄, Ω̄, α2 and k_β
+        t_v, t_om, t_a2, t_k = x[il] * om_bar / G_MPS2, x[il] * v_bar / G_MPS2, -x[il], a_y
+        F[IX, il] = -p * s * t_k
+        F[IY, il] = p * c * t_k
+        F[IX, IA2] = -p * s * t_a2
+        F[IY, IA2] = p * c * t_a2
+    else:
+        ux, uy, dux, duy = c, s, -s, c
+        t_v = t_om = 0.0
+    # ∂/∂v̄ and ∂/∂Ω̄ of the position, then through v̄(v, v̇) and Ω̄(Ω, Ω̇)
+    dxv = tau * ux - p * s * t_v
+    dyv = tau * uy + p * c * t_v
+    dxo = p * dux * 0.5 * tau - p * s * t_om
+    dyo = p * duy * 0.5 * tau + p * c * t_om
+    F[IX, ITH] = p * dux
+    F[IY, ITH] = p * duy
+    F[IX, IV] = dxv
+    F[IY, IV] = dyv
+    F[IX, IVD] = 0.5 * tau * dxv
+    F[IY, IVD] = 0.5 * tau * dyv
+    F[IX, IOM] = dxo
+    F[IY, IOM] = dyo
+    F[IX, IOMD] = 0.5 * tau * dxo
+    F[IY, IOMD] = 0.5 * tau * dyo
     F[ITH, IOM] = tau
     F[ITH, IOMD] = 0.5 * tau * tau
     F[IV, IVD] = tau
@@ -208,15 +289,18 @@ def process_Q(
     tilt_psd: float,
     radius_var_per_m: float = 0.0,
     k_s_rel_var_per_m: float = 0.0,
+    b_var_per_m: float = 0.0,
+    k_beta_var_per_m: float = 0.0,
 ) -> np.ndarray:
     """Process noise covariance ``Q`` over τ (Lindgren Eq. 7 and the end of §4).
 
     White jerk drives the (along-track distance, v, v̇) and (θ, Ω, Ω̇) chains; the distance
     noise is laid along the mean heading in (x, y). Pitch and roll are random walks. For the
-    13-state model the variances of R_w and k_s grow in proportion to the distance travelled
-    in the interval, ``d = |v + τ v̇/2| τ`` (Lindgren §4: "increasing their corresponding
-    variances ... in proportion to the distance travelled"); k_s's growth is relative to its
-    current estimate so that it does not depend on the torque sensor's scale.
+    slip models the variances of R_w and k_s (and Okello's 1/B, and k_β) grow in proportion to
+    the distance travelled in the interval, ``d = |v + τ v̇/2| τ`` (Lindgren §4: "increasing
+    their corresponding variances ... in proportion to the distance travelled"); k_s's growth
+    is relative to its current estimate so that it does not depend on the torque sensor's
+    scale.
 
     Parameters
     ----------
@@ -234,6 +318,12 @@ def process_Q(
         Growth of each R_w variance per metre travelled [m²/m].
     k_s_rel_var_per_m : float
         Growth of each k_s variance per metre travelled, relative to k_s² [1/m].
+    b_var_per_m : float
+        Growth of each inverse Okello shape (1/B) variance per metre travelled [1/m]
+        (15-state model).
+    k_beta_var_per_m : float
+        Growth of the lateral slip gain's variance per metre travelled [rad²/(g² m)] (states
+        with a lateral slip gain).
 
     Returns
     -------
@@ -261,9 +351,14 @@ def process_Q(
         for b in range(2):
             Q[i, speed[b]] = Q[speed[b], i] = qv[0, 1 + b] * u[i]
     Q[IA1, IA1] = Q[IA2, IA2] = tilt_psd * tau
-    if n == N_SLIP:
-        d = abs(v_bar) * tau
+    d = abs(v_bar) * tau
+    base = soil_size(n)
+    if base >= N_SLIP:
         Q[IRL, IRL] = Q[IRR, IRR] = radius_var_per_m * d
         Q[IKL, IKL] = k_s_rel_var_per_m * d * x[IKL] ** 2
         Q[IKR, IKR] = k_s_rel_var_per_m * d * x[IKR] ** 2
+    if base == N_OKELLO:
+        Q[IBL, IBL] = Q[IBR, IBR] = b_var_per_m * d
+    if base != n:
+        Q[n - 1, n - 1] = k_beta_var_per_m * d
     return Q

@@ -1,7 +1,8 @@
 """Observation models of Lindgren's navigation EKF, as plain functions with their Jacobians.
 
 Inertial (Lindgren Eq. 14), inclinometer, odometric without slip (Eq. 15-16) and with the
-linear torque/slip model (Eq. 37, Jacobian Eq. 38-41), and beacon bearing (Eq. 17) with its
+linear torque/slip model (Eq. 37, Jacobian Eq. 38-41) or Okello's curve in its place (Eq. 18-20,
+beyond the paper), and beacon bearing (Eq. 17) with its
 angle-wrapping residual and nearest-innovation association. Each ``*_hx`` takes the state
 ``x`` (layout in :mod:`slipenv.estimators.lindgren.models`) and returns the predicted measurement;
 each ``*_H`` returns ``∂h/∂x`` with one column per state.
@@ -36,6 +37,7 @@ from .models import (
     G_MPS2,
     IA1,
     IA2,
+    IBL,
     IKL,
     IKR,
     IOM,
@@ -47,11 +49,13 @@ from .models import (
     IVD,
     IX,
     IY,
+    N_OKELLO,
     N_SLIP,
+    soil_size,
     wrap,
 )
 
-NO_SOIL = np.zeros(0)  # the ``soil`` argument of the 13-state slip model, which reads x
+NO_SOIL = np.zeros(0)  # the ``soil`` argument of the slip models whose soil is in x
 
 
 # ---------------------------------------------------------------------------------------------
@@ -176,24 +180,137 @@ def odo_H(
 
 @njit(cache=True)
 def slip_params(x: np.ndarray, soil: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(R_w, k_s) per wheel, each shape (2,): the states of a 13-state ``x``, else the oracle's
-    fixed ``soil = [R_wl, R_wr, k_sl, k_sr]``."""
-    if x.shape[0] == N_SLIP:
+    """(R_w, k_s) per wheel, each shape (2,): the states of a slip-model ``x`` (13 or 15
+    states, with or without k_β), else the oracle's fixed ``soil = [R_wl, R_wr, k_sl, k_sr]``."""
+    if soil_size(x.shape[0]) >= N_SLIP:
         return x[IRL:IRR + 1], x[IKL:IKR + 1]
     return soil[0:2], soil[2:4]
+
+
+# ---------------------------------------------------------------------------------------------
+# Okello's curve (Eq. 18-20) and its inverse, for the curved slip model
+# ---------------------------------------------------------------------------------------------
+# Taylor coefficients of φ(u) = g⁻¹(u) / (2u) about u = 0 (series reversion of g, below)
+_PHI_SERIES = (1.0, 2.0 / 3.0, 5.0 / 9.0, 68.0 / 135.0, 193.0 / 405.0, 262.0 / 567.0)
+
+
+@njit(cache=True)
+def okello_g(x: float) -> float:
+    """Okello's normalised curve g(x) = 1 - (1 - e^{-x}) / x at x = s / B (Lindgren Eq. 18,
+    20: T = T_max g(s / B)), continued analytically to x < 0 (g → -∞), so that the filter's
+    model stays smooth where an estimate strays there. g(0) = 0, g'(0) = 1/2."""
+    if abs(x) < 0.1:  # Σ (-1)^(k+1) x^k / (k+1)!, below 1e-13 relative past the last term
+        acc, term = 0.0, 1.0
+        for k in range(1, 10):
+            term *= -x / (k + 1) if k > 1 else x / 2.0
+            acc += term
+        return acc
+    return 1.0 + math.expm1(-x) / x
+
+
+@njit(cache=True)
+def okello_dg(x: float) -> float:
+    """g'(x) = (1 - (1 + x) e^{-x}) / x² of :func:`okello_g`, > 0 everywhere."""
+    if abs(x) < 0.1:  # Σ (-1)^(k+1) k x^(k-1) / (k+1)!
+        acc, term = 0.0, 1.0  # term = (-1)^(k+1) x^(k-1) / (k+1)!
+        for k in range(1, 10):
+            term = 0.5 if k == 1 else -term * x / (k + 1)
+            acc += k * term
+        return acc
+    return (-math.expm1(-x) - x * math.exp(-x)) / (x * x)
+
+
+@njit(cache=True)
+def okello_inverse(u: float) -> float:
+    """x with ``g(x) = u`` (:func:`okello_g`) for u < 1, by Newton's method.
+
+    g is increasing and concave on the whole line, so from any start the first Newton step
+    lands at or left of the root and the iterates then rise to it monotonically. Below
+    u = 1/2 the start is 2u, already left of the root (g(x) <= x/2); above, 1/(1 - u), just
+    right of it (g(x) = 1 - (1 - e^{-x}) / x)."""
+    if abs(u) < 1e-3:
+        acc = 0.0
+        for k in range(len(_PHI_SERIES) - 1, -1, -1):
+            acc = acc * u + _PHI_SERIES[k]
+        return 2.0 * u * acc
+    x = 2.0 * u if u < 0.5 else 1.0 / (1.0 - u)
+    for _ in range(60):
+        dx = (okello_g(x) - u) / okello_dg(x)
+        x -= dx
+        if abs(dx) <= 1e-14 * (1.0 + abs(x)):
+            break
+    return x
+
+
+@njit(cache=True)
+def okello_slip_factor(u: float) -> tuple[float, float]:
+    """φ(u) = g⁻¹(u) / (2u) and φ'(u): the factor by which Okello's curve stretches the
+    linear law's slip at torque ratio u = T / T_max (Lindgren Eq. 20, 24).
+
+    With T = T_max g(s / B) and k_s = T_max / (2B) (Eq. 24), the slip at torque T is
+    ``s = (T / k_s) φ(T / T_max)``; φ(0) = 1 is the linear law, φ → ∞ as T → T_max.
+    Defined (smooth) for all u < 1, including u < 0 (a curve bending the other way)."""
+    if abs(u) < 1e-3:
+        phi, dphi = 0.0, 0.0
+        for k in range(len(_PHI_SERIES) - 1, -1, -1):
+            phi = phi * u + _PHI_SERIES[k]
+            if k > 0:
+                dphi = dphi * u + k * _PHI_SERIES[k]
+        return phi, dphi
+    x = okello_inverse(u)
+    dx = 1.0 / okello_dg(x)  # dx/du
+    return x / (2.0 * u), (dx * u - x) / (2.0 * u * u)
+
+
+@njit(cache=True)
+def slip_model(x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: float,
+               soil: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Slip of the (left, right) wheel from its torque, and its derivatives.
+
+    Linear law (13-state ``x`` or the oracle's ``soil``): ``s = σ T / k_s`` (Lindgren Eq. 24,
+    32; σ the wheel's direction of travel). Okello's curve (15-state ``x``, with b = 1/B):
+    ``s = s_lin φ(b |s_lin| / 2)`` with ``s_lin = σ T / k_s`` (:func:`okello_slip_factor`;
+    b |s_lin| / 2 = |T| / T_max), odd in the torque like Okello's curve, and the linear law
+    exactly at b = 0.
+
+    Returns
+    -------
+    s : np.ndarray, shape (2,)
+        Slip ratio per wheel; ``inf`` where the torque reaches the curve's T_max.
+    ds_dk : np.ndarray, shape (2,)
+        ∂s/∂k_s.
+    ds_db : np.ndarray, shape (2,)
+        ∂s/∂b (zero for the linear law).
+    """
+    _, k_s = slip_params(x, soil)
+    v_w = wheel_speeds(x, tau, track_width_m)
+    okello = soil_size(x.shape[0]) == N_OKELLO
+    s = np.empty(2)
+    ds_dk = np.empty(2)
+    ds_db = np.zeros(2)
+    for i in range(2):
+        s_lin = travel_sign(v_w[i]) * torque[i] / k_s[i]
+        if not okello:
+            s[i] = s_lin
+            ds_dk[i] = -s_lin / k_s[i]
+            continue
+        u = 0.5 * x[IBL + i] * abs(s_lin)
+        if u >= 1.0:
+            s[i], ds_dk[i] = math.inf, 0.0
+            continue
+        phi, dphi = okello_slip_factor(u)
+        s[i] = s_lin * phi
+        ds_dk[i] = -(s_lin / k_s[i]) * (phi + u * dphi)
+        ds_db[i] = s_lin * dphi * 0.5 * abs(s_lin)
+    return s, ds_dk, ds_db
 
 
 @njit(cache=True)
 def wheel_slip(
     x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: float, soil: np.ndarray,
 ) -> np.ndarray:
-    """Longitudinal slip ``s = σ T / k_s`` of the (left, right) wheel (Lindgren Eq. 24, 32)."""
-    _, k_s = slip_params(x, soil)
-    v_w = wheel_speeds(x, tau, track_width_m)
-    s = np.empty(2)
-    for i in range(2):
-        s[i] = travel_sign(v_w[i]) * torque[i] / k_s[i]
-    return s
+    """Slip of the (left, right) wheel (Lindgren Eq. 24, 32; :func:`slip_model`)."""
+    return slip_model(x, tau, torque, track_width_m, soil)[0]
 
 
 @njit(cache=True)
@@ -201,13 +318,15 @@ def odo_slip_hx(
     x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: float, counts_per_rad: float,
     soil: np.ndarray,
 ) -> np.ndarray:
-    """Predicted odometer counts with the linear torque/slip model (Lindgren Eq. 37).
+    """Predicted odometer counts with a torque/slip model (Lindgren Eq. 37).
 
-    ``z = (τ / Γ) (v ∓ W Ω / 2) k_s / (R_w (k_s - σ T))`` per wheel, with σ = 1 forward.
+    ``z = (τ / Γ) (v ∓ W Ω / 2) / (R_w (1 - s))`` per wheel with the slip s of
+    :func:`slip_model`; for the linear law ``1 / (1 - s) = k_s / (k_s - σ T)``, the paper's
+    Eq. 37 with σ = 1 forward.
 
     Parameters
     ----------
-    x : np.ndarray, shape (13,), or (9,) with ``soil``
+    x : np.ndarray, shape (13,) or (15,), or (9,) with ``soil``; plus k_β if it has one
         State at the end of the interval.
     tau : float
         Interval [s].
@@ -220,19 +339,19 @@ def odo_slip_hx(
         1/Γ [counts/rad].
     soil : np.ndarray, shape (4,)
         The oracle's fixed ``[R_wl, R_wr, k_sl, k_sr]`` for a 9-state ``x``; ignored (pass
-        :data:`NO_SOIL`) for the 13-state one, whose R_w and k_s are states.
+        :data:`NO_SOIL`) when R_w and k_s are states.
 
     Returns
     -------
     np.ndarray, shape (2,)
         Counts over the interval. Meaningful only while the slip is below 1.
     """
-    r_w, k_s = slip_params(x, soil)
+    r_w, _ = slip_params(x, soil)
     v_w = wheel_speeds(x, tau, track_width_m)
+    s = slip_model(x, tau, torque, track_width_m, soil)[0]
     z = np.empty(2)
     for i in range(2):
-        sigma = travel_sign(v_w[i])
-        z[i] = tau * counts_per_rad * v_w[i] * k_s[i] / (r_w[i] * (k_s[i] - sigma * torque[i]))
+        z[i] = tau * counts_per_rad * v_w[i] / (r_w[i] * (1.0 - s[i]))
     return z
 
 
@@ -244,24 +363,28 @@ def odo_slip_H(
     """Jacobian of :func:`odo_slip_hx` (Lindgren Eq. 38-41), shape (2, n).
 
     Columns v and Ω are Eq. 38-39; v̇ and Ω̇ follow from the mean-speed evaluation
-    (-τ/2 times Eq. 38-39); R_w and k_s (only when they are states) are Eq. 40-41.
+    (-τ/2 times Eq. 38-39); R_w and k_s (only when they are states) are Eq. 40-41, the latter
+    through ``∂z/∂s ∂s/∂k_s``, as is the column of Okello's 1/B.
     """
-    r_w, k_s = slip_params(x, soil)
+    r_w, _ = slip_params(x, soil)
     v_w = wheel_speeds(x, tau, track_width_m)
+    s, ds_dk, ds_db = slip_model(x, tau, torque, track_width_m, soil)
     n = x.shape[0]
+    base = soil_size(n)
     H = np.zeros((2, n))
     for i in range(2):
-        sigma = travel_sign(v_w[i])
-        den = k_s[i] - sigma * torque[i]
-        dz_dvw = tau * counts_per_rad * k_s[i] / (r_w[i] * den)  # Eq. 38
+        dz_dvw = tau * counts_per_rad / (r_w[i] * (1.0 - s[i]))  # Eq. 38
         H[i, IV] = dz_dvw
         H[i, IOM] = dz_dvw * SIDES[i] * 0.5 * track_width_m  # Eq. 39
         H[i, IVD] = -0.5 * tau * H[i, IV]
         H[i, IOMD] = -0.5 * tau * H[i, IOM]
-        if n == N_SLIP:
-            H[i, IRL + i] = -(dz_dvw * v_w[i]) / r_w[i]  # Eq. 40
-            H[i, IKL + i] = (-tau * counts_per_rad * sigma * torque[i] * v_w[i]
-                             / (r_w[i] * den**2))  # Eq. 41
+        if base >= N_SLIP:
+            z = dz_dvw * v_w[i]
+            dz_ds = z / (1.0 - s[i])
+            H[i, IRL + i] = -z / r_w[i]  # Eq. 40
+            H[i, IKL + i] = dz_ds * ds_dk[i]  # Eq. 41
+            if base == N_OKELLO:
+                H[i, IBL + i] = dz_ds * ds_db[i]
     return H
 
 

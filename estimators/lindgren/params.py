@@ -1,4 +1,5 @@
-"""Parameters of the Lindgren EKF: the four schemes of Lindgren §5 and the noise set."""
+"""Parameters of the Lindgren EKF: the four schemes of Lindgren §5, a fifth with Okello's curve
+in place of the linear torque/slip law, and the noise set."""
 
 from __future__ import annotations
 
@@ -8,26 +9,28 @@ from enum import IntEnum
 
 
 class Scheme(IntEnum):
-    """The four EKF schemes of Lindgren §5."""
+    """The four EKF schemes of Lindgren §5, and scheme 5 (beyond the paper): scheme 4 with
+    Okello's curve (Eq. 18-20) per wheel in place of its linear limit, Eq. 24."""
 
     LASER_INERTIAL = 1  # laser scanner and inertial sensors: the reference ("ground truth")
     ODOMETRY_ONLY = 2  # odometers only, no slip model
     ALL_NO_SLIP = 3  # all sensors, odometry by Eq. 15
     ALL_SLIP = 4  # all sensors, odometry by the slip-aware Eq. 37
+    ALL_SLIP_OKELLO = 5  # all sensors, Eq. 37 with Okello's curve (k_s and 1/B per wheel)
 
 
 def parse_scheme(scheme: int | str | Scheme) -> Scheme:
-    """Scheme from its number (1-4) or name ("laser_inertial", ..., "all_slip")."""
+    """Scheme from its number (1-5) or name ("laser_inertial", ..., "all_slip_okello")."""
     if isinstance(scheme, str) and not scheme.isdigit():
         try:
             return Scheme[scheme.strip().upper()]
         except KeyError:
             names = ", ".join(s.name.lower() for s in Scheme)
-            raise ValueError(f"unknown scheme {scheme!r}; use 1-4 or one of {names}") from None
+            raise ValueError(f"unknown scheme {scheme!r}; use 1-5 or one of {names}") from None
     try:
         return Scheme(int(scheme))
     except ValueError:
-        raise ValueError(f"unknown scheme {scheme!r}; use 1-4") from None
+        raise ValueError(f"unknown scheme {scheme!r}; use 1-5") from None
 
 
 @dataclass(frozen=True)
@@ -85,6 +88,24 @@ class LindgrenNoise:
         soil with T_max ≈ 500 N m and Okello's B ≈ 0.12, k_s = T_max / (2B), Eq. 24).
     k_s_rel_sigma0 : float
         Prior std of k_s relative to ``k_s0``.
+    inv_shape0 : float
+        Scheme 5: prior of the state b = 1/B, the inverse of Okello's shape B [-]; 0 (default)
+        starts from the linear law, the curve's limit b → 0, and lets the data bend it. The
+        filter keeps b >= 0 (Okello's curve saturates; :func:`.kernel.constrain_shape`).
+    inv_shape_sigma0 : float
+        Scheme 5: prior std of b [-] (8: B = 0.12, the value behind ``k_s0``, is 1σ away).
+    inv_shape_var_per_m : float
+        Scheme 5: growth of the variance of b per metre travelled [1/m] (chosen: 0.01,
+        0.1/√m, about 1 %/√m of the prior).
+    lateral_slip_sigma0 : float
+        Prior std of the lateral slip gain k_β [rad/g] (``tan β = k_β a_y``, see
+        :mod:`.models`), whose prior mean is 0. 0 (default): the filter has no lateral slip
+        state, the paper's model (a gain known to be zero needs no state). Lindgren's vehicle
+        simulated on field loam crabs with k_β ≈ 2.5 rad/g (β ≈ 0.9° at 0.0064 g on the 4 m
+        circles); 3 covers it.
+    lateral_slip_var_per_m : float
+        Growth of k_β's variance per metre travelled [rad²/g²/m] (chosen: 1e-3, 0.03 rad/g
+        per √m).
     """
 
     odometer_var_rad2: float = 3.1e-6
@@ -110,11 +131,20 @@ class LindgrenNoise:
     radius_rel_sigma0: float = 0.05
     k_s0: float = 2000.0
     k_s_rel_sigma0: float = 0.5
+    inv_shape0: float = 0.0
+    inv_shape_sigma0: float = 8.0
+    inv_shape_var_per_m: float = 1e-2
+    lateral_slip_sigma0: float = 0.0
+    lateral_slip_var_per_m: float = 1e-3
 
     def __post_init__(self) -> None:
         for f in fields(self):
             value = getattr(self, f.name)
-            if not (math.isfinite(value) and value > 0.0):
+            if f.name in ("lateral_slip_sigma0", "inv_shape0"):
+                if not (math.isfinite(value) and value >= 0.0):
+                    raise ValueError(f"LindgrenNoise.{f.name} must be finite and >= 0, got "
+                                     f"{value!r}")
+            elif not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"LindgrenNoise.{f.name} must be finite and > 0, got {value!r}")
         if self.max_slip >= 1.0:
             raise ValueError("LindgrenNoise.max_slip must be < 1")

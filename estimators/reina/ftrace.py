@@ -4,7 +4,8 @@ Pipeline per frame: region of interest from the last trace → Gaussian blur →
 probabilistic Hough (OpenCV) → segments back-projected to the ground plane with the nominal
 camera model → merged into rut edges → candidates (an edge with its opposite edge at about the
 wheel width, or a lone edge) → fuzzy confidence (:mod:`.fuzzy`) → best candidate above the
-threshold → its straight line refined on the edge pixels and its rut edges followed along the
+threshold → its straight line refined on the edge pixels within a narrow band of its walls
+(:func:`~.trace_lines.refine_angle`) and its rut edges followed along the
 ground (:func:`~.trace_lines.follow_trace`); otherwise the last trace is kept for at most
 ``max_hold_frames`` frames (Reina §4.1: never more than 3 in a row) → slip angle (Eq. 1-2)
 from the trace near the wheel.
@@ -113,6 +114,9 @@ class FTraceConfig:
     max_bend_rad : float
         Largest bend believed; beyond it the near-field line is taken to be pulled onto
         other edges and the line angle is used [rad].
+    refine_band_m : float
+        Half width of the band around a candidate's edge lines whose edge pixels fit its line
+        [m] (see :func:`.trace_lines.refine_angle`).
     rules : FuzzyTraceRules
         Memberships and rule outputs.
     """
@@ -133,11 +137,13 @@ class FTraceConfig:
     near_field_m: float = 0.2
     bend_smoothing_frames: float = 3.0
     max_bend_rad: float = math.radians(6.0)
+    refine_band_m: float = 0.004
     rules: FuzzyTraceRules = field(default_factory=FuzzyTraceRules)
 
     def __post_init__(self) -> None:
         for name in ("wheel_width_m", "blur_sigma_px", "canny_low", "canny_high",
-                     "roi_half_width_m", "initial_roi_angle_rad", "max_bend_rad"):
+                     "roi_half_width_m", "initial_roi_angle_rad", "max_bend_rad",
+                     "refine_band_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"FTraceConfig.{name} must be finite and > 0, got {value!r}")
@@ -269,7 +275,8 @@ class FTrace:
                    angle_rad: float) -> tuple[float, float]:
         """(line angle, near-field angle) of the candidate's trace."""
         cfg = self.config
-        line = refine_angle(edges, self.camera, cfg.ground_z_m, edge_lines, angle_rad)
+        line = refine_angle(edges, self.camera, cfg.ground_z_m, edge_lines, angle_rad,
+                            cfg.refine_band_m)
         points, normals = edge_points_ground(edges, self.camera, cfg.ground_z_m, image)
         curve = follow_trace(points, edge_lines, angle_rad, cfg.wheel_xy_m[0], normals)
         if curve is None:

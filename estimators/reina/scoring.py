@@ -74,10 +74,20 @@ class FTraceScore:
             raise ValueError(f"unknown counter {name!r}")
         return getattr(self, name) / self.frames if self.frames else math.nan
 
+    def confusion(self) -> dict:
+        """Frames by truth (trace present or not) and outcome: the confusion table."""
+        correct = self.with_trace - self.false_negative - self.misidentification
+        without = self.frames - self.with_trace
+        return {"trace_present": {"correct": correct, "misidentified": self.misidentification,
+                                  "not_detected": self.false_negative},
+                "no_trace": {"detected": self.false_positive,
+                             "not_detected": without - self.false_positive}}
+
     def as_dict(self) -> dict:
         """Counts and rates, for a JSON report."""
         return {"frames": self.frames, "with_trace": self.with_trace,
                 "false_positive": self.rate("false_positive"),
                 "false_negative": self.rate("false_negative"),
                 "misidentification": self.rate("misidentification"),
-                "held": self.held, "max_consecutive_misses": self.max_consecutive_misses}
+                "held": self.held, "max_consecutive_misses": self.max_consecutive_misses,
+                "confusion": self.confusion()}

@@ -312,12 +312,16 @@ def follow_trace(points: np.ndarray, edge_lines: np.ndarray, angle_rad: float,
 
 
 def refine_angle(edges: np.ndarray, camera: PinholeCamera, ground_z_m: float,
-                 edge_lines: np.ndarray, angle_rad: float, band_m: float = 0.012,
+                 edge_lines: np.ndarray, angle_rad: float, band_m: float = 0.004,
                  iterations: int = 3) -> float:
     """Least-squares angle of the edge pixels lying on a candidate's edge lines [rad].
 
     Edge pixels within ``band_m`` of each line are back-projected; the groups are centred on
     their own means and fitted jointly (parallel lines, one direction: total least squares);
+    ``band_m`` is about the localisation of one Canny edge (±1.6 px at the rear camera's 2.5 mm
+    per pixel): a rut wall comes with parallel edges a few millimetres away (the floor's edge
+    at 0.85 of the half width, the berm, an overlapping older rut's wall) that diverge from it
+    along the view, and a wider band pulls the fit towards them (set on Reina's test 1);
     the lines are then moved to the new direction through their groups' means and the
     selection repeated, so a slightly curved trace is fitted over its whole visible length
     rather than along the Hough segment only. Falls back to ``angle_rad`` when too few pixels

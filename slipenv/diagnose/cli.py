@@ -282,6 +282,11 @@ def summary(report: dict, seconds: float | None = None) -> str:
               for c in report.get("confounded", [])]
     lines.append(f"held-out {g['metric']}: {num(g['before'])} -> {num(g['after'])} "
                  f"({better(g['relative'])})")
+    tr = report.get("transfer") or {}
+    if tr.get("decision"):
+        part = "run" if tr["held_out_by"] == "run" else "half"
+        lines.append(f"transfer (fitted on the whole paths of the others, each {part} held out "
+                     f"in turn): {tr['decision']}")
     cal = report.get("calibration")
     if cal:
         ddc = cal["diff_drive_controller"]

@@ -6,7 +6,8 @@ rest of the segment by about δ ℓ). They are strongly correlated within a segm
 radius shows as a growing drift), so the standard errors come from the cluster-robust
 ("sandwich") covariance with one cluster per segment (Liang and Zeger 1986), scaled by
 G/(G - p) for G segments and p parameters; never smaller than the classical
-σ² (JᵀJ)⁻¹, which holds when the residuals are independent.
+σ² (JᵀJ)⁻¹, which holds when the residuals are independent (the classical one alone when
+there are no more segments than parameters: the sandwich is then singular).
 
 What is fitted comes from each effect's module (``effects/``): its fields, their bounds and
 scales, and its data-driven starting guesses; this module never names an effect.
@@ -269,6 +270,8 @@ def _cluster_covariance(problem: Problem, effects, seg: Segments, x, jac) -> np.
     meat = scores.T @ scores
     robust = a_inv @ meat @ a_inv * (g / max(g - p, 1))
     classical = a_inv * float(r @ r) / max(len(r) - p, 1)
+    if g <= p:  # fewer clusters than parameters (a few whole paths): the robust estimate is
+        return classical  # singular; the caller floors it by what the paths' spread shows
     # keep the robust correlations, floor each standard error at the classical one
     ratio = np.diag(classical) / np.maximum(np.diag(robust), 1e-300)
     d = np.sqrt(np.maximum(ratio, 1.0))

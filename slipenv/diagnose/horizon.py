@@ -334,3 +334,214 @@ def whitened_score(hz: Horizons, cand: Replays, reference: Replays,
     if b.size < 2 or var <= 0:
         return 1.0
     return float(stats.norm.sf(b.sum() / np.sqrt(var)))
+
+
+# --- Transfer: models fitted on whole paths, replayed whole over the held-out parts ----------
+
+@dataclass
+class Transfer:
+    """A model fitted on the whole dead-reckoned paths of some parts of the logs and replayed
+    whole over the held-out part, for every part in turn (leave-one-part-out).
+
+    The parts are the runs of a folder, or the two halves of a single run: the same test for
+    a session (what does the model of some runs do to the others?) and for one run (what
+    does the model of one half do to the other?). Whole paths, not segments re-anchored every
+    few seconds, because a slow turn-scale error shows only over the path, and a closed path
+    (a square run ends where it began) determines the track width only through its shape.
+
+    Attributes
+    ----------
+    effects : tuple of str
+    by : str
+        ``"run"`` or ``"half"``.
+    before, after : ndarray
+        (P,) mean squared pose residual (position and heading times ℓ) over each held-out
+        part, nominal model and fitted model.
+    pos_before, pos_after : ndarray
+        (P,) position RMSE over each held-out part [m].
+    yaw_before, yaw_after : ndarray
+        (P,) heading RMSE over each held-out part [rad].
+    end_before, end_after : ndarray
+        (P,) position error at the end of each held-out part [m].
+    models : list
+        Model fitted with each part held out; ``xs`` their fitted vectors (P, n).
+    travel_m, turned_rad : float
+        Distance a part covers and angle it turns (medians) [m, rad].
+    """
+
+    effects: tuple[str, ...]
+    by: str
+    before: np.ndarray
+    after: np.ndarray
+    pos_before: np.ndarray
+    pos_after: np.ndarray
+    end_before: np.ndarray
+    end_after: np.ndarray
+    models: list
+    xs: np.ndarray
+    yaw_before: np.ndarray
+    yaw_after: np.ndarray
+    travel_m: float = 1.0
+    turned_rad: float = 1.0
+    scales: np.ndarray | None = None
+
+    def _drifts(self, pos: np.ndarray, yaw: np.ndarray) -> tuple[float, float]:
+        fall = np.sqrt(3.0) * (float(pos.mean()) - float(self.pos_after.mean()))
+        turn_fall = np.sqrt(3.0) * (float(yaw.mean()) - float(self.yaw_after.mean()))
+        return fall / max(self.travel_m, 1e-9), turn_fall / max(self.turned_rad, 1e-9)
+
+    @property
+    def drift(self) -> float:
+        """Position RMS fall × √3 / distance a part covers (median) [-]."""
+        return self._drifts(self.pos_before, self.yaw_before)[0]
+
+    @property
+    def turn_drift(self) -> float:
+        """Heading RMS fall × √3 / angle a part turns (median) [-]."""
+        return self._drifts(self.pos_before, self.yaw_before)[1]
+
+    def scale_change(self, other: Transfer | None = None) -> float:
+        """How much this model changes the turn or the distance of the held-out parts, over
+        the nominal model's (or ``other``'s): the larger of |c_θ - c_θ'| and |c_d - c_d'|,
+        median over the parts [-]."""
+        if self.scales is None:
+            return 0.0
+        ref = np.ones_like(self.scales) if other is None or other.scales is None \
+            else other.scales
+        return float(np.median(np.abs(self.scales - ref).max(axis=1)))
+
+    def drift_over(self, other: Transfer) -> float:
+        """The larger of the position and heading drifts this model removes beyond
+        ``other`` (on the same parts), or of the turn and distance scales it changes."""
+        return max(*self._drifts(other.pos_after, other.yaw_after), self.scale_change(other))
+
+    def jackknife_cov(self) -> np.ndarray:
+        """Covariance of the fitted vector from the spread of the leave-one-part-out fits
+        (jackknife: (n - 1)/n Σ (x_k - x̄)(x_k - x̄)ᵀ)."""
+        n = len(self.xs)
+        d = self.xs - self.xs.mean(axis=0)
+        return (n - 1) / n * d.T @ d
+
+    @property
+    def ratio(self) -> float:
+        """Held-out error over the nominal model's, summed over the parts."""
+        return float(self.after.sum() / max(float(self.before.sum()), 1e-300))
+
+    @property
+    def worse(self) -> bool:
+        """True if the model predicts the held-out parts worse than the nominal model: in
+        sum, or on half of them or more."""
+        return bool(self.after.sum() > self.before.sum()
+                    or 2 * int(np.sum(self.after > self.before)) >= self.after.size)
+
+    def passes(self, min_gain: float, min_drift: float) -> bool:
+        """Material transfer: the held-out error falls by ``min_gain`` overall and on most
+        parts, and the model is material: the drift it removes, or the change it makes to
+        the turn or the distance of the parts, is ``min_drift`` of the distance or of the
+        angle turned (on a closed path the error does not grow along the path, so the drift
+        read from its RMS understates a turn-scale error: the scale says it directly)."""
+        return (1.0 - self.ratio >= min_gain and not self.worse
+                and max(self.drift, self.turn_drift, self.scale_change()) >= min_drift)
+
+    def as_dict(self) -> dict:
+        return {"effects": list(self.effects), "held_out_by": self.by,
+                "error_ratio": self.ratio, "per_part_error_ratio":
+                (self.after / np.maximum(self.before, 1e-300)).tolist(),
+                "position_rmse_m": {"before": self.pos_before.tolist(),
+                                    "after": self.pos_after.tolist()},
+                "final_position_error_m": {"before": self.end_before.tolist(),
+                                           "after": self.end_after.tolist()},
+                "drift": self.drift, "turn_drift": self.turn_drift,
+                "scale_change": self.scale_change(),
+                "makes_a_part_worse": self.worse}
+
+
+def whole_parts(logs: list) -> tuple[Segments, str] | None:
+    """The parts of ``logs`` replayed whole (from the first to the last ground-truth sample):
+    every run when there are ``MIN_BLOCKS`` or more, else the two halves of each run (a
+    clockwise and a counter-clockwise run: a model fitted on one direction alone cannot
+    separate the wheel-radius ratio from the track width, so each held-out half is predicted
+    by a model that saw both directions); None when fewer than two parts hold ground truth."""
+    from slipenv.diagnose.segments import log_arrays
+
+    arrays = [log_arrays(log) for log in logs]
+    spans = []
+    for li, arr in enumerate(arrays):
+        ok = np.flatnonzero(arr["gt_ok"])
+        if ok.size < 2:
+            continue
+        if len(logs) >= MIN_BLOCKS:
+            spans.append((li, int(ok[0]), int(ok[-1]) + 1))
+        else:
+            mid = int(ok[ok.size // 2])
+            spans += [(li, int(ok[0]), mid + 1), (li, mid, int(ok[-1]) + 1)]
+    seg = cut_spans(arrays, logs, spans) if len(spans) >= 2 else None
+    if seg is None or len(seg) < 2:
+        return None
+    return seg, "run" if len(logs) >= MIN_BLOCKS else "half"
+
+
+def whole_runs(logs: list) -> Segments | None:
+    """Every run of ``logs`` replayed whole, from its first to its last ground-truth sample
+    (the paths a folder's model must explain)."""
+    from slipenv.diagnose.segments import log_arrays
+
+    arrays = [log_arrays(log) for log in logs]
+    spans = [(li, int(ok[0]), int(ok[-1]) + 1) for li, arr in enumerate(arrays)
+             if (ok := np.flatnonzero(arr["gt_ok"])).size >= 2]
+    return cut_spans(arrays, logs, spans) if spans else None
+
+
+def fit_whole(problem: Problem, parts: Segments, effects: tuple[str, ...],
+              index: np.ndarray | None = None, start: dict | None = None):
+    """``effects`` fitted on the parts at ``index`` (all by default) replayed whole."""
+    from slipenv.diagnose.fit import fit
+
+    whole = Problem(parts, problem.heading_scale_m, problem.travel_m)
+    return fit(whole, effects, index, start)
+
+
+def transfer(problem: Problem, parts: Segments, by: str, effects: tuple[str, ...],
+             start: dict | None = None) -> Transfer:
+    """Leave-one-part-out replays of ``parts`` (:func:`whole_parts`) by ``effects``."""
+    whole = Problem(parts, problem.heading_scale_m, problem.travel_m)
+    n = len(parts)
+    out = {k: np.zeros(n) for k in ("before", "after", "pos_before", "pos_after",
+                                     "end_before", "end_after")}
+    models, xs, scales = [], [], np.ones((n, 2))
+    yaw = {"before": np.zeros(n), "after": np.zeros(n)}
+    for k in range(n):
+        f = fit_whole(problem, parts, effects, np.flatnonzero(np.arange(n) != k), start)
+        model = f.params
+        models.append(model)
+        xs.append(f.x)
+        part = parts.take(np.array([k]))
+        ok = part.gt_ok[0]
+        scales[k] = motion_scales(part, model)
+        for tag, m in (("before", {}), ("after", model)):
+            res = whole.residuals((), m, part, "pose")[0][ok]
+            out[tag][k] = float(np.mean(np.sum(res**2, axis=-1)))
+            out[f"pos_{tag}"][k] = float(np.sqrt(np.mean(np.sum(res[:, :2] ** 2, axis=-1))))
+            out[f"end_{tag}"][k] = float(np.hypot(*res[-1, :2]))
+            yaw[tag][k] = float(np.sqrt(np.mean(res[:, 2] ** 2))) / problem.heading_scale_m
+    travel = np.abs(parts.dphi * parts.radius[:, None, :]).mean(axis=-1).sum(axis=1)
+    d = parts.radius[:, None, :] * parts.dphi
+    left = d[..., parts.sides == 0].mean(axis=-1)
+    right = d[..., parts.sides == 1].mean(axis=-1)
+    turned = np.abs((right - left) / parts.track[:, None]).sum(axis=1)
+    return Transfer(effects, by, models=models, xs=np.array(xs), yaw_before=yaw["before"],
+                    yaw_after=yaw["after"], travel_m=float(np.median(travel)),
+                    turned_rad=float(np.median(turned)), scales=scales, **out)
+
+
+def motion_scales(part: Segments, model) -> np.ndarray:
+    """(c_θ, c_d): the turn and the distance of ``part`` (one segment) replayed by ``model``
+    over the nominal replay's (each interval's turn signed by the nominal one's)."""
+    from slipenv.diagnose.replay import simulate
+
+    nominal, pred = simulate(part, {})[0], simulate(part, model)[0]
+    d0, d1 = (np.angle(np.exp(1j * np.diff(x[:, 2]))) for x in (nominal, pred))
+    s0 = np.hypot(*np.diff(nominal[:, :2], axis=0).T)
+    s1 = np.hypot(*np.diff(pred[:, :2], axis=0).T)
+    turn = float(np.sum(np.sign(d0) * d1) / max(float(np.abs(d0).sum()), 1e-12))
+    return np.array([turn, float(s1.sum() / max(float(s0.sum()), 1e-12))])

@@ -81,6 +81,22 @@ def long_gain(sel: Selection) -> dict[str, Any] | None:
             "evaluated_on": "held-out half of the log replayed whole (fit on the other half)"}
 
 
+def transfer_gain(sel: Selection) -> dict[str, Any] | None:
+    """Position RMSE of the held-out parts (runs, or halves) replayed whole, by the nominal
+    model and by the pose model the transfer route chose (fitted on the other parts); None
+    unless that route chose the pose model."""
+    chosen = sel.transfer.get("chosen")
+    if chosen is None:
+        return None
+    pos = chosen["position_rmse_m"]
+    b = float(np.sqrt(np.mean(np.square(pos["before"]))))
+    a = float(np.sqrt(np.mean(np.square(pos["after"]))))
+    by = "run" if chosen["held_out_by"] == "run" else "half of a run"
+    return {"metric": "position_rmse_m", "before": b, "after": a,
+            "relative": 1.0 - a / b if b > 0 else 0.0,
+            "evaluated_on": f"held-out {by} replayed whole (fitted on the others)"}
+
+
 def consistency(sel: Selection, problem: Problem) -> dict[str, Any]:
     """NIS and whiteness of the segment-end pose residuals, nominal vs extended.
 
@@ -150,6 +166,11 @@ def build_report(sel: Selection, problem: Problem, logs: list[Log], where: str) 
         final = sel.final.get("pose")
         if not only_gyro and final is not None and not final.short_significant:
             gain = dict(lg)  # found on the long-horizon route: its held-out gain
+    tg = transfer_gain(sel)
+    if tg is not None:
+        g["position_rmse_m_transfer"] = tg
+        if not only_gyro:
+            gain = dict(tg)  # the pose model was chosen by its transfer: that gain
     candidates = []
     for c in sel.candidates:
         entry: dict[str, Any] = {"cause": c.name}
@@ -192,6 +213,7 @@ def build_report(sel: Selection, problem: Problem, logs: list[Log], where: str) 
         "consistency": consistency(sel, problem),
         "thresholds": {"alpha": ALPHA, "min_gain": MIN_GAIN, "min_drift": MIN_DRIFT,
                        "n_folds": N_FOLDS},
+        "transfer": sel.transfer or None,
         "long_horizon": (None if sel.horizons is None else
                          {"horizons_s": sel.horizons.lengths_s,
                           "blocks": int(max(b.max() for b in sel.horizons.block)) + 1}),
@@ -297,6 +319,35 @@ def write_human_report(folder: str | Path, report: dict, sel: Selection, problem
     return folder
 
 
+def transfer_markdown(tr: dict | None) -> list[str]:
+    """The transfer section of ``report.md``: what a model fitted on some parts of the logs
+    does to the others, replayed whole."""
+    if not tr or not tr.get("tested"):
+        return []
+    part = "run" if tr["held_out_by"] == "run" else "half of a run"
+    lines = ["## Transfer", "",
+             f"Each geometric model fitted on the whole dead-reckoned paths of all but one "
+             f"{part} ({tr['parts']} parts) and replayed whole over the one left out: its "
+             "error over the nominal model's (lower is better).", "",
+             "| model | held-out path error ratio | per part | final position error, nominal "
+             "→ model [m] | drift | transfers |", "|---|---|---|---|---|---|"]
+    rows = list(tr["tested"]) + ([tr["named_cause"]] if "named_cause" in tr and
+                                 tr["named_cause"]["effects"] not in
+                                 [t["effects"] for t in tr["tested"]] else [])
+    for t in rows:
+        end = t["final_position_error_m"]
+        lines.append(
+            f"| {'+'.join(t['effects'])} | {num(t['error_ratio'], '.3f')} | "
+            f"{', '.join(num(r, '.2f') for r in t['per_part_error_ratio'])} | "
+            f"{num(float(np.mean(end['before'])), '.4f')} → "
+            f"{num(float(np.mean(end['after'])), '.4f')} | "
+            f"{num(max(t['drift'], t['turn_drift']), '.4f')} | "
+            + ("no: worse on the held-out parts" if t["makes_a_part_worse"] else
+               "yes" if t.get("transfers") else "no: not material") + " |")
+    lines += ["", f"Decision: {tr.get('decision', '–')}.", ""]
+    return lines
+
+
 def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
     """The text of ``report.md``."""
     g = report["gain"]
@@ -328,9 +379,11 @@ def markdown(report: dict, figs: dict[str, Path], sim: dict | None) -> str:
         lines += [""]
     if report.get("calibration"):
         lines += calibration.markdown(report["calibration"])
+    how = ("each segment predicted by a model fitted without it"
+           if g.get("evaluated_on") == "held-out" else g.get("evaluated_on", ""))
     lines += [f"Held-out {g['metric']}: **{num(g['before'])} → {num(g['after'])}** "
-              f"({better(g['relative'])}), each segment predicted by a model "
-              "fitted without it.", ""]
+              f"({better(g['relative'])}), {how}.", ""]
+    lines += transfer_markdown(report.get("transfer"))
     seg = report["segments"]
     lines += [f"{seg['count']} segments of about {seg['duration_s']:.1f} s, each replayed from "
               f"the logged pose at its start; {seg['folds']} folds ({seg['fold_by']}).", "",

@@ -49,6 +49,7 @@ from tqdm import tqdm
 from slipenv.diagnose import horizon, replay
 from slipenv.diagnose.effects import EFFECTS, effect
 from slipenv.diagnose.fit import Fit, Problem, param_count
+from slipenv.diagnose.numbers import implausible_geometry
 from slipenv.diagnose.segments import Segments, log_arrays
 from slipenv.diagnose.workers import INLINE, Workers
 
@@ -59,6 +60,8 @@ MIN_GYRO_DRIFT_RAD_S = 1e-3  # [rad/s] material gyro heading drift: RMS fall × 
 TIE_RATIO = 1.25  # a simpler effect within this error ratio of the best and not worse wins
 N_FOLDS = 6
 MIN_SEGMENTS = 4
+GEOMETRIC_SETS = (("track_width",), ("track_width", "rolling_radius"))
+"""The geometric models the transfer route compares: the width alone, the width and radii."""
 
 Routes = tuple[horizon.Horizons, horizon.Horizons | None]
 """The long route's held-out blocks, and the two halves of a single log (or None)."""
@@ -118,6 +121,7 @@ class Selection:
     horizons: horizon.Horizons | None = None
     halves: horizon.Horizons | None = None
     long_baseline: dict[str, LongReference] = field(default_factory=dict)
+    transfer: dict = field(default_factory=dict)
 
 
 def make_folds(seg: Segments) -> np.ndarray:
@@ -439,14 +443,140 @@ def _select(problem: Problem, progress: bool, logs: list | None, workers: Worker
             rest = [r for r in rest if r not in current.effects
                     and not _same_mechanism(r, current.effects)]
         final[ch] = current
+    transfer_info: dict = {}
+    whole_fit = None
+    if logs and "pose" in channels:
+        whole_fit, transfer_info = _transfer_route(problem, logs, final, folds,
+                                                   baseline["pose"], why)
     order = sorted(final.values(), key=lambda c: -c.gain_relative)
     chosen = [e for c in order for e in c.effects]
-    submitted = {ch: workers.fit(problem, c.effects) for ch, c in final.items()}
+    submitted = {ch: workers.fit(problem, c.effects) for ch, c in final.items()
+                 if not (ch == "pose" and whole_fit is not None)}
     fits = {ch: f.result() for ch, f in submitted.items()}
+    if whole_fit is not None:
+        fits["pose"] = whole_fit
     ranked = sorted(candidates, key=lambda c: (c.untestable is not None,
                                                c.effects[0] not in chosen[:1],
                                                not c.significant, c.error_ratio))
     return Selection(cause=chosen[0] if chosen else "none", also=chosen[1:],
                      candidates=ranked, baseline=baseline, final=final, fits=fits, folds=folds,
                      horizons=None if hz is None else hz[0],
-                     halves=None if hz is None else hz[1], long_baseline=long_base)
+                     halves=None if hz is None else hz[1], long_baseline=long_base,
+                     transfer=transfer_info)
+
+
+def _geometric_order(effects: tuple[str, ...], first: tuple[str, ...]) -> tuple[str, ...]:
+    """``effects`` with those of ``first`` (the cause already named) leading."""
+    return tuple(sorted(effects, key=lambda e: (e not in first, e != "track_width")))
+
+
+def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
+                    folds: np.ndarray, baseline: Candidate, why: dict
+                    ) -> tuple[Fit | None, dict]:
+    """Transfer as the test of the pose channel's model (``horizon.transfer``).
+
+    The geometric models (``GEOMETRIC_SETS``, and the named cause's when it is geometric)
+    are fitted on the whole dead-reckoned paths of some parts of the logs (runs, or halves)
+    and replayed whole over the held-out part. Among those whose transfer is material
+    (``Transfer.passes``) the simplest is kept, and a larger set only when it passes the same
+    tests against it: its held-out path error ``MIN_GAIN`` below the simpler one's, most
+    held-out parts predicted better, and the drift it removes beyond the simpler one
+    material (on parts the fits did not see, so two runs cannot be overfitted). Then:
+
+    - nothing named on the pose channel: the geometric model is named;
+    - a geometric cause named: replaced by the geometric model (fitted on the whole paths:
+      a closed path determines the width only through its shape); dropped if it predicts the
+      held-out parts worse and no geometric model transfers;
+    - another cause named (not a local one, which the short segments judge): tested the same
+      way, and replaced by the geometric model when that transfers at least as well, or
+      dropped when it predicts the held-out parts worse.
+
+    ``final`` is updated in place. Returns the pose model fitted on every run's whole path
+    (None when the pose channel's model is left as it was) and what the route found, for the
+    report.
+    """
+    current = final.get("pose")
+    if current is not None and any(effect(e).local for e in current.effects):
+        return None, {}
+    made = horizon.whole_parts(logs)
+    if made is None:
+        return None, {}
+    parts, by = made
+    sets: list[tuple[str, ...]] = [s for s in GEOMETRIC_SETS if all(why.get(e) is None for e in s)]
+    geometric_current = current is not None and all(effect(e).calibration
+                                                    for e in current.effects)
+    if (current is not None and geometric_current
+            and tuple(sorted(current.effects)) not in {tuple(sorted(s)) for s in sets}):
+        sets.append(current.effects)
+    sets.sort(key=param_count)
+    tested = [horizon.transfer(problem, parts, by, s) for s in sets]
+    best = None
+    for t in tested:
+        if not t.passes(MIN_GAIN, MIN_DRIFT):
+            continue
+        if best is None or (t.after.sum() <= (1.0 - MIN_GAIN) * best.after.sum()
+                            and 2 * int(np.sum(t.after < best.after)) > t.after.size
+                            and t.drift_over(best) >= MIN_DRIFT):
+            best = t
+    mine = None
+    if current is not None:
+        mine = next((t for t in tested if set(t.effects) == set(current.effects)), None)
+        if mine is None:
+            mine = horizon.transfer(problem, parts, by, current.effects)
+    info = {"held_out_by": by, "parts": len(parts),
+            "tested": [{**t.as_dict(), "transfers": t.passes(MIN_GAIN, MIN_DRIFT)}
+                       for t in tested],
+            **({"named_cause": {**mine.as_dict(), "transfers": mine.passes(MIN_GAIN, MIN_DRIFT)}}
+               if mine is not None else {})}
+    # (mine is None only when nothing was named)
+    replace = best is not None and (current is None or geometric_current or mine is None
+                                    or not mine.passes(MIN_GAIN, MIN_DRIFT)
+                                    or best.after.sum() <= mine.after.sum())
+    if replace:
+        assert best is not None
+        effects = _geometric_order(best.effects, current.effects if current else ())
+        cand = cross_validate(problem, effects, folds)
+        _judge(problem, cand, baseline.errors)
+        cand.gain_relative = 1.0 - best.ratio
+        final["pose"] = cand
+        # the model of the folder: the one that best explains every run's whole path
+        runs = horizon.whole_runs(logs)
+        whole = horizon.fit_whole(problem, parts if runs is None else runs, best.effects)
+        jack = best.jackknife_cov()
+        # the whole-path fit's own covariance, its standard errors floored by the spread of
+        # the leave-one-part-out fits (the uncertainty the transfer shows)
+        d = np.sqrt(np.maximum(np.diag(jack) / np.maximum(np.diag(whole.cov), 1e-300), 1.0))
+        whole.cov = whole.cov * d[:, None] * d[None, :]
+        info.update(chosen=best.as_dict(), decision=(
+            "named by transfer" if current is None else
+            "the named geometric model refitted on the whole paths"
+            if geometric_current and set(best.effects) == set(current.effects) else
+            f"{current.name} replaced by {'+'.join(best.effects)} fitted on the whole paths"
+            if geometric_current else
+            f"replaces {current.name}: the geometric model transfers "
+            + ("as well or better" if mine is not None and mine.passes(MIN_GAIN, MIN_DRIFT) else
+               f"and {current.name} does not")))
+        return whole, info
+    if mine is not None and mine.worse:
+        if current is not None and _far_from_nominal(problem, current):
+            # the log's meta.json, not the vehicle, is the likelier culprit: keep the cause so
+            # the report warns, rather than answer none
+            info["decision"] = (f"{current.name} kept though it predicts the held-out parts "
+                                "worse: its fit is far from the nominal geometry (warned)")
+            return None, info
+        del final["pose"]
+        info["decision"] = f"{'+'.join(mine.effects)} dropped: it predicts the held-out " \
+            "parts worse"
+        return None, info
+    info["decision"] = "kept" if current is not None else "none transfers"
+    return None, info
+
+
+def _far_from_nominal(problem: Problem, cand: Candidate) -> bool:
+    """Whether a candidate's fitted track width or radii are implausibly far from the log's
+    nominal geometry (`numbers.implausible_geometry`, the report's warning)."""
+    if not cand.fold_fits:
+        return False
+    nominal = {"wheel_radius_m": float(np.median(problem.seg.radius)),
+               "track_width_m": float(np.median(problem.seg.track))}
+    return bool(implausible_geometry(cand.fold_fits[0].report(problem.seg), nominal))

@@ -13,9 +13,11 @@ Why some effects are hidden on one kind only: on a skid-steer vehicle a softer l
 law shows mainly in turns (the scrub torque dominates and the slip follows the combined law),
 so soil patches are hidden on the differential-drive vehicle, soil maps (two fields of their
 own softness) on it and on the rover (on a slope, as torque slip); torque slip is hidden on every
-kind, but on a skid-steer vehicle it is the world ``turning_slip`` hides and is named so (its
-``Confound``; the benchmark counts it apart), and the rover stands on a slope so that it
-has a drive torque to slip with (``effects/torque_slip.py``); a
+kind, the rover and the skid-steer vehicles on a slope: the rover so that it has a drive
+torque to slip with, the skid-steer vehicles because on level ground their drive torque is
+their turning resistance, so that a softer law is the world ``turning_slip`` hides and is
+named so (its ``Confound``), while a grade torque is one the turn does not set
+(``effects/torque_slip.py``); a
 differential-drive vehicle with castors on a soft side slope yaws downhill (the castors carry
 no side force), which is not Yamauchi's side slip, so slopes with side slip are skid-steer
 only. ``combined_slip`` is not generated: on these vehicles a slip angle comes only with side

@@ -38,8 +38,8 @@ import gymnasium as gym
 from slipenv.envs.config import SlipEnvConfig
 
 ENTRY_POINT = "slipenv.envs.slip_env:SlipEnv"
-# Fitted by ``slipenv reproduce yamauchi --vehicle tracked_patako --soil toyoura_sand
-# --save-model PATH`` (the env preset's world); version-controlled package data.
+# Fitted by ``slipenv reproduce yamauchi --save-model PATH`` (the env preset's world, the
+# reproduction's default); version-controlled package data.
 YAMAUCHI_MODEL = "yamauchi_slip_model.json"
 
 
@@ -67,8 +67,7 @@ def yamauchi_observation() -> dict:
             f"slipenv/data/{YAMAUCHI_MODEL} is missing from the installed package ({model}); "
             "it is package data (pyproject.toml [tool.setuptools.package-data]): reinstall "
             "slipenv, or regenerate it in a source checkout with `slipenv reproduce yamauchi "
-            f"--vehicle tracked_patako --soil toyoura_sand --save-model "
-            f"slipenv/data/{YAMAUCHI_MODEL}`")
+            f"--save-model slipenv/data/{YAMAUCHI_MODEL}`")
     saved = json.loads(model.read_text())
     for key in ("beta_model", "n"):
         if key not in saved:
@@ -100,11 +99,13 @@ PRESETS: dict[str, dict] = {
     "slipenv/FarmField-v0": dict(
         vehicle="farm_2wd", terrain="flat", soil="field_loam", force_model="linear",
         path="lindgren_circles", path_kwargs={"radius_m": 4.0, "speed_mps": 0.5},
-        beacons=True, estimator="lindgren_ekf", estimator_kwargs={"scheme": 4},
+        beacons=True, estimator="lindgren_ekf",
+        # the castors make the vehicle crab on the circles: the EKF estimates the slip angle
+        estimator_kwargs={"scheme": 4, "params": {"lateral_slip_sigma0": 3.0}},
         max_episode_s=170.0,
     ),
     "slipenv/TrackedSlopeCircle-v0": dict(
-        vehicle="tracked_patako",
+        vehicle="tracked_patako_wong_chiang",
         terrain={"kind": "slope", "slope_deg": 15.0, "downhill_azimuth_deg": -90.0},
         soil="toyoura_sand", force_model="janosi", **yamauchi_observation(),
         path="circle", path_kwargs={"radius_m": 0.25, "speed_mps": 0.05, "loops": 1.0},

@@ -85,7 +85,7 @@ def run_local(todo: list[dict], out_dir: str, workers: int, quiet: bool) -> None
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
-        from slipenv.estimators.lindgren.ekf import warm_up
+        from slipenv.envs.compiled import warm_up
 
         warm_up()  # compiled here once, not by every worker at the same time on a cold cache
         ctx = multiprocessing.get_context("spawn")

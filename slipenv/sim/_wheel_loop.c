@@ -4,11 +4,13 @@
  * PyBullet (through pybullet's Python API, or through Bullet's C API once verified against it:
  * bullet_native.h); per loaded wheel, the contact frame, then for a driven wheel the slip
  * relaxation step, the force law and the two soil dampers, applied at the contact patch, and
- * for every wheel the rate-independent motion resistance, applied at the wheel centre. The
- * physics is not written here: every law is a function of slipenv/terramechanics/_laws.h
- * (sources and equations there), the one implementation the Python API binds as well. A force
- * model that is not one of slipenv's (its kernel_constants is None: a user's law) is called
- * back as its Python kernel, (slip, tan_beta, load_n) -> (fx_n, fy_n, resistance_n).
+ * for every wheel the rate-independent motion resistance, applied at the wheel centre (for a
+ * driven wheel with the slip-sinkage state, plus what its dug depth adds:
+ * laws_kernel_sinkage_state). The physics is not written here: every law is a function of
+ * slipenv/terramechanics/_laws.h (sources and equations there), the one implementation the
+ * Python API binds as well. A force model that is not one of slipenv's (its kernel_constants is
+ * None: a user's law) is called back as its Python kernel, (slip, tan_beta, load_n) -> (fx_n,
+ * fy_n, resistance_n).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -32,6 +34,7 @@ typedef struct {
     double f_r;          /* rolling resistance coefficient of the law (multi-pass) */
     /* state */
     double s, b, rut, rut_vec[3];
+    double dug; /* depth dug below the static rut (laws_kernel_sinkage_state) */
     /* last substep */
     double load, fx, fy, res, damper, force[3];
 } Wheel;
@@ -361,7 +364,7 @@ static PyObject *loop_reset(WheelLoop *self, PyObject *unused)
 {
     for (int k = 0; k < self->n; k++) {
         Wheel *w = &self->w[k];
-        w->s = w->b = w->rut = 0.0;
+        w->s = w->b = w->rut = w->dug = 0.0;
         w->rut_vec[0] = w->rut_vec[1] = w->rut_vec[2] = 0.0;
         w->load = w->fx = w->fy = w->res = w->damper = 0.0;
         w->force[0] = w->force[1] = w->force[2] = 0.0;
@@ -724,7 +727,8 @@ static int loop_step(WheelLoop *self)
         double load = w->load;
         w->fx = w->fy = w->res = w->damper = 0.0;
         if (load <= 0.0) {
-            w->s = w->b = w->rut = 0.0;
+            /* off the ground: out of its rut too */
+            w->s = w->b = w->rut = w->dug = 0.0;
             w->rut_vec[0] = w->rut_vec[1] = w->rut_vec[2] = 0.0;
             w->force[0] = w->force[1] = w->force[2] = 0.0;
             continue;
@@ -755,6 +759,9 @@ static int loop_step(WheelLoop *self)
                 return -1;
             w->fx = f_long;
             w->fy = f_lat;
+            if (w->py_kernel == NULL && w->kernel.sinkage_state)
+                res += laws_kernel_sinkage_state(&w->kernel, &w->dug, r_omega, v_long, w->h,
+                                                 load);
             /* the side damper fades with the leak of the state it damps */
             double d_y = laws_lateral_damping(t - t_old, v_lat_ref, w->d_lat, self->fade_speed);
             double d_x = laws_longitudinal_damping(r_omega, v_long, v_ref, w->c_long,
@@ -904,6 +911,7 @@ static PyObject *loop_apply(WheelLoop *self, PyObject *unused)
 FIELD_LIST(s, PyFloat_FromDouble(w->s))
 FIELD_LIST(b, PyFloat_FromDouble(w->b))
 FIELD_LIST(rut, PyFloat_FromDouble(w->rut))
+FIELD_LIST(dug, PyFloat_FromDouble(w->dug))
 FIELD_LIST(load, PyFloat_FromDouble(w->load))
 FIELD_LIST(fx, PyFloat_FromDouble(w->fx))
 FIELD_LIST(fy, PyFloat_FromDouble(w->fy))
@@ -1013,6 +1021,8 @@ static PyGetSetDef loop_getset[] = {
     {"s", (getter)get_s, NULL, "slip ratio per wheel", NULL},
     {"b", (getter)get_b, NULL, "tan of the slip angle per wheel", NULL},
     {"rut", (getter)get_rut, NULL, "resistance element state per driven wheel", NULL},
+    {"dug", (getter)get_dug, NULL,
+     "depth dug below the static rut per driven wheel [m] (slip sinkage state)", NULL},
     {"rut_vec", (getter)get_rut_vec, NULL, "resistance element state per castor", NULL},
     {"load", (getter)get_load, NULL, "normal load per wheel [N]", NULL},
     {"fx", (getter)get_fx, NULL, "longitudinal force law per wheel [N]", NULL},

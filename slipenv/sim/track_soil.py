@@ -29,37 +29,64 @@ rate of change of each cell's displacement at fixed hull position
 (``track.soil_damper_forces``): zero in any steady motion, it only damps transients. Its last
 value is ``damping_n`` (per road wheel, [N]; ``damper_n`` of ``contact_state``) next to the
 shear forces.
+
+Cost. Steps 2-5 are one compiled call (numba, from the text of ``track``:
+`track.track_substep`, with the hull frame and the force commands compiled here,
+`_hull_kinematics` and `_substep`), the slip-sinkage factor the wheels' C law called by address
+(``_track_io``).
+Steps 1 and 5 go through Bullet's C API (``slipenv/sim/_track_io.c``, on the wheel loop's
+``bullet_native.h``) where pybullet allows it (`native_queries`), checked against pybullet's
+Python API bit for bit on the first substep with contact and then on every
+``bullet_native.VERIFY_EVERY``-th (a mismatch or a broken guard region reads through the
+Python API for good, warned once); ``SLIPENV_PYBULLET_API=1`` reads through the Python API
+throughout. Both paths read and apply the same doubles, so they give the same trajectory bit
+for bit. The first use after an install or an edit compiles the model (about 35 s of CPU);
+numba caches it on disk, and `warm_up` does it in a parent process before workers start.
 """
 
 from __future__ import annotations
 
+import importlib
 import math
 from dataclasses import dataclass
 
+import llvmlite.binding
 import numpy as np
+from numba import njit, types
+from numba.core import config as numba_config
 
 from slipenv.contracts.constants import G_MPS2
 from slipenv.pybullet_quiet import import_pybullet
+from slipenv.sim.bullet_native import (
+    VERIFY_EVERY,
+    client_table,
+    python_api_forced,
+    warn_native_mismatch,
+)
 from slipenv.sim.wheel_soil import WheelContactState
-from slipenv.terramechanics.bekker import compaction_resistance_n, pressure_sinkage_m
+from slipenv.terramechanics.bekker import slip_sinkage_factor
 from slipenv.terramechanics.models import ForceModel
 from slipenv.terramechanics.soil import SoilParams
 from slipenv.terramechanics.soil_map import SoilMap, UniformSoil, soil_rows
 from slipenv.terramechanics.track import (
-    advance_shear,
-    advance_wall,
-    cell_forces,
+    SETTING_NAMES,
+    SOIL_ROWS,
     load_spread_matrix,
     rut_resistance_n,
-    sliding_velocity,
-    slip_sinkage_factor,
-    soil_damper_forces,
-    wall_force_n_per_m,
+    track_substep,
 )
 from slipenv.vehicles.body import VehicleBody
 from slipenv.vehicles.spec import VehicleSpec
 
 p = import_pybullet()  # the banner-free first import (see slipenv.pybullet_quiet)
+_track_io = importlib.import_module("slipenv.sim._track_io")  # built by pip install (setup.py)
+# The wheels' slip-sinkage law (Lyasko, ``_laws.h``), called by the compiled substep by name
+# (resolved at link time, so numba's cache stays valid); as plain Python, its binding.
+llvmlite.binding.add_symbol("slipenv_track_slip_sinkage_factor",
+                            _track_io.slip_sinkage_factor_address)
+_lyasko = (slip_sinkage_factor if numba_config.DISABLE_JIT  # type: ignore[attr-defined]
+           else types.ExternalFunction("slipenv_track_slip_sinkage_factor",
+                                       types.float64(types.float64)))
 
 
 @dataclass(frozen=True)
@@ -138,6 +165,15 @@ class TrackSoilInjector:
         Physics substep [s].
     params : TrackModelParams
         Cells, unit weight, damping.
+
+    Attributes
+    ----------
+    native_queries : bool
+        PyBullet is read and the forces applied through Bullet's C API (module docstring).
+    native_mismatch : bool
+        A check of the native reader failed; it reads through the Python API from then on.
+    native_verifications : int
+        Substeps on which the native readings were compared with the Python API's.
     """
 
     def __init__(self, client: int, spec: VehicleSpec, body: VehicleBody, ground_id: int,
@@ -205,8 +241,7 @@ class TrackSoilInjector:
         self.r_belt = [float(np.mean([self.radius[k] for k in ks])) for ks in self.tracks]
         self.max_wall_m = (self.params.max_wall_height_m if self.params.max_wall_height_m
                            is not None else 2.0 * max(self.r_belt))
-        # Buffers of `apply`.
-        self._v_cell = np.empty((2, nt, n_cells))
+        # Buffers of `apply` (`track.track_substep`).
         self._out = np.empty((6, nt, n_cells))  # total x, y; shear x, y; wall; |damper|
         self._cell_mass_kg = self.mass_kg / nt / n_cells
         lever_rows = np.zeros((nt, nt * n_cells))
@@ -215,7 +250,47 @@ class TrackSoilInjector:
             lever_rows[i, i * n_cells:(i + 1) * n_cells] = self.lever[i]
             track_rows[i, i * n_cells:(i + 1) * n_cells] = 1.0
         self._reduce = np.vstack((self.assign_all, lever_rows, track_rows))
+        self._sums = np.zeros((self._reduce.shape[0], 6))
+        self._compaction = np.zeros(nt)
+        self._sinkage_factor = np.ones(nt)
+        self._soil = np.zeros((len(SOIL_ROWS), nt))
+        self._deform = np.ones(nt)
+        settings = dict(dx_m=self.dx_m, dt_s=dt_s,
+                        direction_length_m=self.params.direction_length_m,
+                        damping_ratio=self.params.damping_ratio,
+                        cell_mass_kg=self._cell_mass_kg,
+                        unit_weight_n_m3=self.params.unit_weight_n_m3,
+                        max_wall_height_m=self.max_wall_m)
+        self._settings = np.array([settings[k] for k in SETTING_NAMES], dtype=float)
         self._contact_base = np.array(self.contact_base)
+        # PyBullet through Bullet's C API where pybullet allows it (`native_queries`).
+        self._io = _track_io.TrackIO(client, self.body_id, ground_id, p.WORLD_FRAME,
+                                     list(self.links), list(self.spin_joints))
+        self._reading = np.zeros(14 + 2 * self.n)  # `TrackIO.read`'s layout
+        self._check = np.zeros_like(self._reading)
+        self._commands = np.zeros((self.n + 2 * nt, 8))  # `TrackIO.apply`'s rows
+        self._commands[:self.n, 0] = self.links
+        # Per substep: the hull's rotation (row-major) and (v_y, omega_x, omega_z) in hull
+        # axes; per track u, V_x, V_y, slip, tan(slip angle) (`_hull_kinematics`).
+        self._rot = np.zeros(9)
+        self._hull = np.zeros(3)
+        self._tracks_now = np.zeros((5, nt))
+        self._res = np.zeros(self.n)
+        self._track_of = np.array(self.track_of, dtype=np.int64)
+        # Per track: belt radius, y and z of the centre line, x of the cells' middle.
+        self._track_geometry = np.array([self.r_belt, self.y_list, self.z_list, self.x_mid])
+        self._rut_settings = np.array([self.params.resistance_speed_mps, self.mass_kg / nt])
+        self.native_queries = False
+        self.native_mismatch = False
+        self.native_verifications = 0
+        self._verify, self._contact_substeps = True, 0
+        table = None if python_api_forced() else client_table()
+        if table is not None:
+            try:
+                self._io.bind(table.path, table.offset, table.n_clients, table.anchor_offset)
+                self.native_queries = True
+            except OSError:
+                pass
         self.reset()
 
     # -- state ------------------------------------------------------------------------------
@@ -228,20 +303,20 @@ class TrackSoilInjector:
         self.walls = np.zeros((2, 2, nt, n_cells))
         self.wall = self.walls[0]  # left, right wall penetration [m]
         self.berm = self.walls[1]  # left, right berm cross-section [m^2]
-        self.travel = [0.0] * nt
-        self.cut_front = [0.0] * nt
-        self.cut_rear = [0.0] * nt
+        self.rut = np.zeros((3, nt))  # per track: travel, front and rear end of its rut [m]
         self.sinkage_m = np.zeros((nt, n_cells))
-        self.track_slip = [0.0] * nt
-        self.track_tanb = [0.0] * nt
-        self.load = [0.0] * self.n
-        self.fx = [0.0] * self.n
-        self.fy = [0.0] * self.n
-        self.res = [0.0] * self.n
-        self.damping_n = [0.0] * self.n
-        self.wall_n = [0.0] * nt
+        self._reading[:] = 0.0
+        self._tracks_now[:] = 0.0
+        self._sums[:] = 0.0
+        self._res[:] = 0.0
         self.chassis_contact = False
         self.sample_soil(force=True)
+        self._args = (self._track_of, self._track_geometry, self._rot, self._hull,
+                      self._tracks_now, self._sinkage_factor, self._deform, self.spread_all,
+                      self._reduce, self.x_cell, self._soil, self._settings, self.j, self.e,
+                      self.walls, self._out, self.sinkage_m, self._sums, self._compaction,
+                      self._contact_base, self._rut_settings, self.rut, self._res,
+                      self._commands)
 
     def sample_soil(self, force: bool = False) -> None:
         """Sample the soil at each track's centre (once per control step)."""
@@ -257,25 +332,20 @@ class TrackSoilInjector:
                              [pos[1] + rot[4] * y for y in self.y])
         self._soil_rows = rows
 
-        def per_track(values: list[float]):
-            """One float when the tracks agree (cheaper to broadcast), else a (nt, 1) column."""
-            if all(v == values[0] for v in values):
-                return float(values[0])
-            return np.array(values)[:, None]
-
-        self._c = per_track([float(sp.cohesion_pa) for sp in rows])
-        phi = [float(sp.friction_angle_rad) for sp in rows]
-        self._phi = per_track(phi)
-        self._tan_phi = per_track([math.tan(v) for v in phi])
-        self._n_phi = per_track([math.tan(math.pi / 4.0 + v / 2.0) ** 2 for v in phi])
-        self._k = per_track([float(sp.shear_modulus_m) for sp in rows])
-        self._kc = per_track([float(sp.k_c) for sp in rows])
-        self._kphi = per_track([float(sp.k_phi) for sp in rows])
-        self._n = per_track([float(sp.n_exp) for sp in rows])
-        self._deform = np.array([1.0 if float(sp.deformable) > 0.5 else 0.0 for sp in rows])
-        self._rigid_tracks = bool((self._deform == 0.0).any())
-        self._w = per_track(self.width)
-        self._inv_area = 1.0 / (self._w * self.dx_m)
+        soil = {
+            "width_m": self.width,
+            "inv_cell_area_m2": [1.0 / (w * self.dx_m) for w in self.width],
+            "k_c": [float(sp.k_c) for sp in rows],
+            "k_phi": [float(sp.k_phi) for sp in rows],
+            "n_exp": [float(sp.n_exp) for sp in rows],
+            "cohesion_pa": [float(sp.cohesion_pa) for sp in rows],
+            "tan_phi": [math.tan(float(sp.friction_angle_rad)) for sp in rows],
+            "shear_modulus_m": [float(sp.shear_modulus_m) for sp in rows],
+            "friction_angle_rad": [float(sp.friction_angle_rad) for sp in rows],
+        }
+        # In place: the compiled substep holds these arrays (`_args`).
+        self._soil[...] = [soil[k] for k in SOIL_ROWS]
+        self._deform[...] = [1.0 if float(sp.deformable) > 0.5 else 0.0 for sp in rows]
 
     def soil_at_wheel(self, k: int) -> SoilParams:
         """The soil (floats) under road wheel ``k``'s track at the last `sample_soil`."""
@@ -286,22 +356,17 @@ class TrackSoilInjector:
         return self.r_belt[self.track_of[k]]
 
     # -- the substep -------------------------------------------------------------------------
-    def _read_state(self) -> tuple:
-        """One batched PyBullet read: the base pose and axes, the hull velocities in hull
-        axes, the road-wheel loads, the belt speeds and the tracks' ground speeds."""
-        cid, bid = self.client, self.body_id
-        contacts = p.getContactPoints(bodyA=bid, bodyB=self.ground_id, physicsClientId=cid)
-        joints = p.getJointStates(bid, self.spin_joints, physicsClientId=cid)
-        pos, orn = p.getBasePositionAndOrientation(bid, physicsClientId=cid)
-        lin, ang = p.getBaseVelocity(bid, physicsClientId=cid)
-        r = p.getMatrixFromQuaternion(orn)
-        ex, ey, ez = (r[0], r[3], r[6]), (r[1], r[4], r[7]), (r[2], r[5], r[8])
-        vbx = lin[0] * ex[0] + lin[1] * ex[1] + lin[2] * ex[2]
-        vby = lin[0] * ey[0] + lin[1] * ey[1] + lin[2] * ey[2]
-        wbx = ang[0] * ex[0] + ang[1] * ex[1] + ang[2] * ex[2]
-        wby = ang[0] * ey[0] + ang[1] * ey[1] + ang[2] * ey[2]
-        wbz = ang[0] * ez[0] + ang[1] * ez[1] + ang[2] * ez[2]
-        load = [0.0] * self.n
+    def _read_python(self, out: np.ndarray) -> None:
+        """This substep's readings through pybullet's Python API, in `TrackIO.read`'s layout
+        (base position, orientation, linear and angular velocity; road-wheel loads; spin
+        rates; chassis contact)."""
+        cid, bid, n = self.client, self.body_id, self.n
+        contacts = p.getContactPoints(bid, self.ground_id, -2, -2, cid)
+        pos, orn = p.getBasePositionAndOrientation(bid, cid)
+        lin, ang = p.getBaseVelocity(bid, cid)
+        joints = p.getJointStates(bid, self.spin_joints, cid)
+        load = [0.0] * n
+        chassis = 0.0
         link_to_wheel = self.link_to_wheel
         for cp in contacts:
             f = cp[9]
@@ -309,132 +374,270 @@ class TrackSoilInjector:
                 continue
             k = link_to_wheel.get(cp[3])
             if k is None:
-                self.chassis_contact = True
+                chassis = 1.0
                 continue
             load[k] += f
-        # Belt speed, track ground speed (hull axes).
-        u_list = [self.r_belt[i] * sum(joints[k][1] for k in ks) / len(ks)
-                  for i, ks in enumerate(self.tracks)]
-        vx_list = [vbx + wby * zc - wbz * yi for zc, yi in zip(self.z_list, self.y_list,
-                                                                strict=True)]
-        return pos, (ex, ey, ez, r), (vby, wbx, wbz), load, u_list, vx_list
+        out[:] = (*pos, *orn, *lin, *ang, *load, *(js[1] for js in joints), chassis)
 
-    def _slip(self, u_list: list[float], vx_list: list[float]) -> list[float]:
-        """The tracks' slips i = (u - V)/u in [-1, 1] (0 at rest, -1 sliding with the belt
-        stopped)."""
-        slip = []
-        for ui, vi in zip(u_list, vx_list, strict=True):
-            s = (ui - vi) / ui if abs(ui) > 1e-3 else (0.0 if abs(vi) < 1e-3 else -1.0)
-            slip.append(min(max(s, -1.0), 1.0))
-        return slip
+    def _acquire(self) -> np.ndarray:
+        """This substep's readings: natively once verified, else through the Python API. The
+        native readings are compared with the Python API's bit for bit on every substep up to
+        the first with a road wheel on the ground, then on every `VERIFY_EVERY`-th substep
+        with contact, and the guard regions after the structs pybullet fills on every
+        substep; a failed check reads through the Python API for good (warned once)."""
+        reading = self._reading
+        if not self.native_queries:
+            self._read_python(reading)
+            return reading
+        status = self._io.read(reading)
+        if status.__class__ is int:
+            broken, contact = None, status == 1
+        else:
+            broken, contact = status, bool(reading[13:13 + self.n].any())
+        if not self._verify and broken is None:
+            if not contact:
+                return reading
+            self._contact_substeps += 1
+            if VERIFY_EVERY <= 0 or self._contact_substeps < VERIFY_EVERY:
+                return reading
+        self._contact_substeps = 0
+        self._read_python(self._check)
+        self.native_verifications += 1
+        if broken is not None:
+            why = f"the guard region after {broken} was overwritten"
+        elif reading.tobytes() != self._check.tobytes():
+            why = "the native readings of the track injector differ from the Python API's"
+        else:
+            if contact:
+                self._verify = False
+            return reading
+        self.native_queries, self.native_mismatch = False, True
+        reading[:] = self._check
+        warn_native_mismatch(why)
+        return reading
 
     def apply(self) -> None:
         """Compute and apply the track forces for the coming substep: the functions of
-        `slipenv.terramechanics.track` composed (module docstring)."""
-        dt, dx, prm = self.dt_s, self.dx_m, self.params
-        nt, n_cells = len(self.tracks), prm.n_cells
-        pos, axes, (vby, wbx, wbz), load, u_list, vx_list = self._read_state()
-        c, tan_phi, k, width = self._c, self._tan_phi, self._k, self._w
-        v_cell = sliding_velocity(vx_list, u_list, [vby - wbx * zc for zc in self.z_list], wbz,
-                                  self.x_cell, out=self._v_cell)
-        pressure = (self.spread_all @ load).reshape(nt, n_cells)  # cell loads
-        pressure *= self._inv_area
-        slip = self._slip(u_list, vx_list)
-        z = pressure_sinkage_m(pressure, width, self._kc, self._kphi, self._n)
-        z *= slip_sinkage_factor(slip)[:, None]
-        if self._rigid_tracks:
-            z *= self._deform[:, None]  # no sinkage on rigid ground
-        self.sinkage_m = z
-        j, e = self.j, self.e
-        j_old = j[..., :-1] + j[..., 1:]  # twice the cells' displacement before the step
-        advance_shear(j, e, v_cell, u_list, wbz, dx, dt, prm.direction_length_m)
-        out = self._out
-        f_shear, stiffness = cell_forces(j, e, pressure, width, dx, c, tan_phi, k,
-                                         out=out[2:4])
-        dj = j[..., :-1] + j[..., 1:]
-        dj -= j_old
-        dj *= 0.5
-        f_damp = soil_damper_forces(dj, f_shear, stiffness, prm.direction_length_m,
-                                    prm.damping_ratio, self._cell_mass_kg, dt)
-        advance_wall(self.walls, v_cell[1], vx_list, z, dx, dt)
-        f_wall = out[4]
-        np.multiply(wall_force_n_per_m(self.walls, z, prm.unit_weight_n_m3, c, self._phi,
-                                       self.max_wall_m, n_phi=self._n_phi), dx, out=f_wall)
-        # Per road wheel: total, shear, wall and damper magnitude; per track the yaw moment of
-        # the lateral forces about the road wheels and the wall force: one product.
-        np.add(f_shear, f_damp, out=out[0:2])
-        out[1] += f_wall
-        np.hypot(f_damp[0], f_damp[1], out=out[5])
-        sums = self._reduce @ out.reshape(6, -1).T  # (n + 2 n_tracks, 6)
-        r_c = compaction_resistance_n(z.max(axis=1, keepdims=True), width, self._kc,
-                                      self._kphi, self._n)
-        self._apply_forces(pos, axes, sums, np.ravel(r_c).tolist(), load, vx_list, vby, wbx,
-                           wbz)
-        self.track_slip = slip
+        `slipenv.terramechanics.track` composed (module docstring) in one compiled call,
+        `_substep` (`track.track_substep` with the hull frame and the force commands)."""
+        reading = self._acquire()
+        if reading[-1]:
+            self.chassis_contact = True
+        self._submit(_substep(reading, *self._args))
 
-    def _apply_forces(self, pos, axes, sums: np.ndarray, compaction_n: list[float],
-                      load: list[float], vx_list: list[float], vby: float, wbx: float,
-                      wbz: float) -> None:
-        """Apply each road wheel's share of the cell forces at its contact point, each
-        track's rut resistance (its compaction resistance ``compaction_n`` as a rut state)
-        on the hull at its centre line and its residual yaw moment; record the readings.
-        ``sums`` (n + 2 n_tracks, 6): per road wheel its total x, y, shear x, y, wall and
-        |damper| force, then per track the yaw moment (column 1), then per track the wall
-        force (column 4)."""
-        cid, bid, dt, prm = self.client, self.body_id, self.dt_s, self.params
-        nt = len(self.tracks)
-        ex, ey, ez, r = axes
-        apply_force, world = p.applyExternalForce, p.WORLD_FRAME
-        px, py, pz = pos
-        links = self.links
-        n = self.n
-        rot = np.array(r).reshape(3, 3)  # body -> world
-        points = (self._contact_base @ rot.T + pos).tolist()
-        forces = (sums[:n, :2] @ rot[:, :2].T).tolist()
-        rows = sums.tolist()
-        for k in range(n):
-            apply_force(bid, links[k], forces[k], points[k], world, physicsClientId=cid)
-        res_out = [0.0] * n
-        for i, ks in enumerate(self.tracks):
-            # Compaction resistance (rut state) along the track, on the hull at its centre line.
-            vt = vx_list[i]
-            self.travel[i] += vt * dt
-            r_c = compaction_n[i]
-            v_reg = max(prm.resistance_speed_mps, 2.0 * r_c * dt / (self.mass_kg / nt))
-            f_res, self.cut_front[i], self.cut_rear[i] = rut_resistance_n(
-                r_c, self.travel[i], self.cut_front[i], self.cut_rear[i], vt, v_reg)
-            if f_res != 0.0:
-                yi, zc = self.y_list[i], self.z_list[i]
-                point = (px + yi * ey[0] + zc * ez[0], py + yi * ey[1] + zc * ez[1],
-                         pz + yi * ey[2] + zc * ez[2])
-                apply_force(bid, -1, (f_res * ex[0], f_res * ex[1], f_res * ex[2]), point,
-                            world, physicsClientId=cid)
-            total_w = sum(load[k] for k in ks)
-            for k in ks:
-                res_out[k] = abs(f_res) * (load[k] / total_w if total_w > 0.0 else 0.0)
-            mz = rows[n + i][1]
-            if mz != 0.0:
-                p.applyExternalTorque(bid, -1, (mz * ez[0], mz * ez[1], mz * ez[2]), world,
-                                      physicsClientId=cid)
-            vy_mean = vby + wbz * self.x_mid[i] - wbx * self.z_list[i]
-            self.track_tanb[i] = vy_mean / vt if abs(vt) > 1e-3 else 0.0
-        self.load, self.res = load, res_out
-        self.fx = [row[2] for row in rows[:n]]
-        self.fy = [row[3] + row[4] for row in rows[:n]]
-        self.damping_n = [row[5] for row in rows[:n]]
-        self.wall_n = [row[4] for row in rows[n + nt:]]
+    def _submit(self, count: int) -> None:
+        """Apply the first ``count`` rows of the command buffer, in order: natively, or
+        through pybullet's Python API (the same doubles)."""
+        if self.native_queries:
+            self._io.apply(self._commands, count)
+            return
+        cid, bid, world = self.client, self.body_id, p.WORLD_FRAME
+        for row in self._commands[:count].tolist():
+            if row[1] == 0.0:
+                p.applyExternalForce(bid, int(row[0]), row[2:5], row[5:8], world,
+                                     physicsClientId=cid)
+            else:
+                p.applyExternalTorque(bid, int(row[0]), row[2:5], world, physicsClientId=cid)
 
     # -- reading ----------------------------------------------------------------------------
+    @property
+    def load(self) -> list[float]:
+        """Normal load of each road wheel in the last substep [N]."""
+        return self._reading[13:13 + self.n].tolist()
+
+    @property
+    def fx(self) -> list[float]:
+        """Each road wheel's share of its track's shear force along the hull's x [N]."""
+        return self._sums[:self.n, 2].tolist()
+
+    @property
+    def fy(self) -> list[float]:
+        """Each road wheel's share of the lateral shear plus side-wall force [N]."""
+        return (self._sums[:self.n, 3] + self._sums[:self.n, 4]).tolist()
+
+    @property
+    def res(self) -> list[float]:
+        """Each road wheel's share (by load) of its track's rut resistance magnitude [N]."""
+        return self._res.tolist()
+
+    @property
+    def damping_n(self) -> list[float]:
+        """Each road wheel's share of the soil dampers' force magnitude [N]."""
+        return self._sums[:self.n, 5].tolist()
+
+    @property
+    def wall_n(self) -> list[float]:
+        """Each track's side-wall force [N]."""
+        return self._sums[self.n + len(self.tracks):, 4].tolist()
+
+    @property
+    def track_slip(self) -> list[float]:
+        """Each track's slip i = (u - V)/u in [-1, 1] (0 at rest, -1 sliding with the belt
+        stopped)."""
+        return self._tracks_now[3].tolist()
+
+    @property
+    def track_tanb(self) -> list[float]:
+        """Each track's tan(slip angle), V_y/V_x at its centre."""
+        return self._tracks_now[4].tolist()
+
     def contact_state(self) -> WheelContactState:
         """Per road wheel: its track's slip and tan(slip angle), its load, its share of the
         track's shear (f_x) and lateral shear plus side-wall force (f_y), of the rut
         resistance, and of the soil-spring damper's force magnitude (``damper_n``) [N]."""
         load = np.array(self.load)
         return WheelContactState(
-            slip=np.array([self.track_slip[i] for i in self.track_of]),
-            tan_beta=np.array([self.track_tanb[i] for i in self.track_of]),
+            slip=self._tracks_now[3][self._track_of], tan_beta=self._tracks_now[4][self._track_of],
             load_n=load, fx_n=np.array(self.fx), fy_n=np.array(self.fy),
-            resistance_n=np.array(self.res), in_contact=load > 0.0,
+            resistance_n=self._res.copy(), in_contact=load > 0.0,
             damper_n=np.array(self.damping_n),
         )
 
+
+# -- the compiled glue of a substep ----------------------------------------------------------
+@njit(cache=True)
+def _hull_kinematics(reading: np.ndarray, track_of: np.ndarray, geometry: np.ndarray,
+                     rot: np.ndarray, hull: np.ndarray, tracks_now: np.ndarray) -> None:
+    """The hull's rotation and twist and each track's kinematics from a reading (in place).
+
+    ``reading`` in `TrackIO.read`'s layout; ``geometry`` rows per track: belt radius, y and z
+    of its centre line, x of its cells' middle (base frame). Writes ``rot`` (row-major,
+    Bullet's quaternion-to-matrix formula, as ``getMatrixFromQuaternion``), ``hull`` (v_y,
+    omega_x, omega_z in hull axes) and ``tracks_now`` rows per track: belt speed u = r_s
+    times the mean spin rate of its road wheels, ground speed V_x of its centre line, lateral
+    speed V_y at its height, slip (u - V_x)/u clipped to [-1, 1] (0 at rest, -1 sliding with
+    the belt stopped) and tan of the slip angle at its centre.
+    """
+    x, y, z, w = reading[3], reading[4], reading[5], reading[6]
+    s = 2.0 / (x * x + y * y + z * z + w * w)
+    xs, ys, zs = x * s, y * s, z * s
+    wx, wy, wz = w * xs, w * ys, w * zs
+    xx, xy, xz = x * xs, x * ys, x * zs
+    yy, yz, zz = y * ys, y * zs, z * zs
+    rot[0], rot[1], rot[2] = 1.0 - (yy + zz), xy - wz, xz + wy
+    rot[3], rot[4], rot[5] = xy + wz, 1.0 - (xx + zz), yz - wx
+    rot[6], rot[7], rot[8] = xz - wy, yz + wx, 1.0 - (xx + yy)
+    lx, ly, lz = reading[7], reading[8], reading[9]
+    ax, ay, az = reading[10], reading[11], reading[12]
+    vbx = lx * rot[0] + ly * rot[3] + lz * rot[6]
+    vby = lx * rot[1] + ly * rot[4] + lz * rot[7]
+    wbx = ax * rot[0] + ay * rot[3] + az * rot[6]
+    wby = ax * rot[1] + ay * rot[4] + az * rot[7]
+    wbz = ax * rot[2] + ay * rot[5] + az * rot[8]
+    hull[0], hull[1], hull[2] = vby, wbx, wbz
+    n = track_of.size
+    for i in range(tracks_now.shape[1]):
+        rates, count = 0.0, 0
+        for k in range(n):
+            if track_of[k] == i:
+                rates += reading[13 + n + k]
+                count += 1
+        u = geometry[0, i] * rates / count
+        yi, zc = geometry[1, i], geometry[2, i]
+        vx = vbx + wby * zc - wbz * yi
+        if abs(u) > 1e-3:
+            slip = (u - vx) / u
+        else:
+            slip = 0.0 if abs(vx) < 1e-3 else -1.0
+        vy_mean = vby + wbz * geometry[3, i] - wbx * zc
+        tracks_now[0, i] = u
+        tracks_now[1, i] = vx
+        tracks_now[2, i] = vby - wbx * zc
+        tracks_now[3, i] = min(max(slip, -1.0), 1.0)
+        tracks_now[4, i] = vy_mean / vx if abs(vx) > 1e-3 else 0.0
+
+
+@njit(cache=True)
+def _substep(reading, track_of, geometry, rot, hull, tracks_now, sinkage_factor, deformable,
+             spread, reduce, x_cell, soil, settings, j, e, walls, out, sinkage_m, sums,
+             compaction_n, contact_base, rut_settings, rut, res, commands) -> int:
+    """One substep from a reading: the hull frame (`_hull_kinematics`), each track's
+    slip-sinkage factor (the wheels' C law), `track.track_substep`, then the force commands;
+    returns their count.
+
+    ``commands`` rows [link, 0 force / 1 torque, vector, point] in the world frame: each road
+    wheel's share of its cells' forces at its contact point (``contact_base``, base frame), so
+    the channel motor feels r sum F_x as the sprocket would; per track, its compaction
+    resistance as a rut state (`track.rut_resistance_n`; ``rut`` rows travel, front, rear) on
+    the hull at its centre line, and the residual yaw moment of the lateral forces about the
+    road wheels (exactly what the lumping misses) on the hull. ``rut_settings``: the
+    resistance's regularisation speed [m/s] and each track's share of the mass [kg]. ``res``
+    gets each road wheel's share (by load) of its track's resistance magnitude.
+    """
+    n = track_of.size
+    nt = tracks_now.shape[1]
+    _hull_kinematics(reading, track_of, geometry, rot, hull, tracks_now)
+    for i in range(nt):
+        sinkage_factor[i] = _lyasko(tracks_now[3, i])
+    load = reading[13:13 + n]
+    track_substep(load, tracks_now[0], tracks_now[1], tracks_now[2], hull[2], sinkage_factor,
+                  deformable, spread, reduce, x_cell, soil, settings, j, e, walls, out,
+                  sinkage_m, sums, compaction_n)
+    px, py, pz = reading[0], reading[1], reading[2]
+    for k in range(n):
+        fx, fy = sums[k, 0], sums[k, 1]
+        cx, cy, cz = contact_base[k, 0], contact_base[k, 1], contact_base[k, 2]
+        for a in range(3):
+            commands[k, 1] = 0.0
+            commands[k, 2 + a] = fx * rot[3 * a] + fy * rot[3 * a + 1]
+            commands[k, 5 + a] = (cx * rot[3 * a] + cy * rot[3 * a + 1]
+                                  + cz * rot[3 * a + 2]) + reading[a]
+    count = n
+    dt = settings[1]
+    for i in range(nt):
+        vt = tracks_now[1, i]
+        rut[0, i] += vt * dt
+        r_c = compaction_n[i]
+        v_reg = max(rut_settings[0], 2.0 * r_c * dt / rut_settings[1])
+        f_res, rut[1, i], rut[2, i] = rut_resistance_n(r_c, rut[0, i], rut[1, i], rut[2, i],
+                                                       vt, v_reg)
+        if f_res != 0.0:
+            yi, zc = geometry[1, i], geometry[2, i]
+            row = commands[count]
+            row[0], row[1] = -1.0, 0.0
+            row[2], row[3], row[4] = f_res * rot[0], f_res * rot[3], f_res * rot[6]
+            row[5] = px + yi * rot[1] + zc * rot[2]
+            row[6] = py + yi * rot[4] + zc * rot[5]
+            row[7] = pz + yi * rot[7] + zc * rot[8]
+            count += 1
+        total_w = 0.0
+        for k in range(n):
+            if track_of[k] == i:
+                total_w += load[k]
+        for k in range(n):
+            if track_of[k] == i:
+                res[k] = abs(f_res) * (load[k] / total_w if total_w > 0.0 else 0.0)
+        mz = sums[n + i, 1]
+        if mz != 0.0:
+            row = commands[count]
+            row[0], row[1] = -1.0, 1.0
+            row[2], row[3], row[4] = mz * rot[2], mz * rot[5], mz * rot[8]
+            row[5], row[6], row[7] = 0.0, 0.0, 0.0
+            count += 1
+    return count
+
+
+def warm_up() -> None:
+    """Compile the track model's substep now, or load it from numba's on-disk cache.
+
+    The first call after an install or an edit of `slipenv.terramechanics.track` (or of the
+    `janosi` and `bekker` laws it compiles, or of this module) compiles it (about 20 s of CPU);
+    later ones load it (a fraction of a second). Call it in a parent process before starting
+    worker processes that build tracked vehicles: numba's cache is not safe against several
+    processes writing it at the same time, so they should find it written.
+    """
+    nt, nc, n = 2, 4, 2
+    reading = np.zeros(14 + 2 * n)
+    reading[6] = 1.0  # the identity quaternion
+    reading[13:13 + n] = 1.0
+    track_of = np.arange(n, dtype=np.int64)
+    geometry = np.ones((4, nt))
+    rot, hull, tracks_now = np.zeros(9), np.zeros(3), np.zeros((5, nt))
+    settings = np.array([0.03, 1 / 240, 1e-3, 1.0, 0.5, 1.3e4, 0.1])
+    _substep(
+        reading, track_of, geometry, rot, hull, tracks_now, np.ones(nt), np.ones(nt),
+        np.full((nt * nc, n), 0.5), np.ones((n + 2 * nt, nt * nc)), np.zeros((nt, nc)),
+        np.ones((len(SOIL_ROWS), nt)), settings, np.zeros((2, nt, nc + 1)),
+        np.zeros((2, nt, nc)), np.zeros((2, 2, nt, nc)), np.zeros((6, nt, nc)),
+        np.zeros((nt, nc)), np.zeros((n + 2 * nt, 6)), np.zeros(nt), np.zeros((n, 3)),
+        np.array([1e-3, 1.0]), np.zeros((3, nt)), np.zeros(n), np.zeros((n + 2 * nt, 8)))

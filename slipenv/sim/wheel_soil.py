@@ -29,7 +29,12 @@ per wheel (`slip_dynamics.rut_resistance_n`): full R against the travel at any s
 rest whatever holds the wheel, at most R. Driven wheels resist along their heading; castors
 (ideal swivels) along their contact velocity (`slip_dynamics.rut_resistance_vector_n`).
 Optionally (``multi_pass``) a wheel running in the rut of the wheel ahead compacts only the
-soil below that rut (`bekker.rut_following_compaction_n`).
+soil below that rut (`bekker.rut_following_compaction_n`). With a force model's
+``slip_sinkage="accumulated"`` each driven wheel carries one more state, the depth it has dug
+below its static rut (`dug`): it grows with the distance the rim slides and relaxes over the
+distance the wheel rolls, over the same patch length as the slip (`models.dug_depth_step`),
+and the soil dug is bulldozed ahead of the wheel as part of its resistance
+(`models.dug_depth_resistance`); a wheel off the ground leaves its rut (the state is zeroed).
 """
 
 from __future__ import annotations
@@ -253,6 +258,7 @@ class WheelSoilInjector:
     res = _read("res")
     damper = _read("damper")
     rut = _read("rut")
+    dug = _read("dug")
     rut_vec = _read("rut_vec")
     resistance_force_n = _read("resistance_force_n")
 

@@ -282,6 +282,41 @@ static PyObject *fn_slip_sinkage_resistance(PyObject *mod, PyObject *const *args
         laws_slip_sinkage_resistance(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]));
 }
 
+static PyObject *fn_dug_resistance(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
+{
+    double a[8];
+    if (floats(args, nargs, 8, "dug_resistance_n", a) < 0)
+        return NULL;
+    return PyFloat_FromDouble(
+        laws_dug_resistance(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]));
+}
+
+static PyObject *fn_slip_sinkage_step(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
+{
+    double a[6];
+    if (floats(args, nargs, 6, "slip_sinkage_step", a) < 0)
+        return NULL;
+    return PyFloat_FromDouble(laws_slip_sinkage_step(a[0], a[1], a[2], a[3], a[4], a[5]));
+}
+
+static PyObject *fn_kernel_sinkage_state(PyObject *mod, PyObject *const *args,
+                                         Py_ssize_t nargs)
+{
+    LawsKernel k;
+    double a[5];
+    if (nargs != 6) {
+        PyErr_Format(PyExc_TypeError, "kernel_sinkage_state() takes 6 arguments (%zd given)",
+                     nargs);
+        return NULL;
+    }
+    if (laws_parse_kernel(args[0], &k) < 0
+        || floats(args + 1, 5, 5, "kernel_sinkage_state", a) < 0)
+        return NULL;
+    double dug = a[0];
+    double res = laws_kernel_sinkage_state(&k, &dug, a[1], a[2], a[3], a[4]);
+    return Py_BuildValue("(dd)", dug, res);
+}
+
 static PyObject *fn_okello_h(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
 {
     double x;
@@ -385,6 +420,12 @@ static PyMethodDef module_methods[] = {
     FAST("slip_sinkage_resistance_n", fn_slip_sinkage_resistance,
          "slip_sinkage_resistance_n(slip, compaction, n, sinkage, width, cohesion, phi, "
          "unit_weight)"),
+    FAST("dug_resistance_n", fn_dug_resistance,
+         "dug_resistance_n(dug, compaction, n, sinkage, width, cohesion, phi, unit_weight)"),
+    FAST("slip_sinkage_step", fn_slip_sinkage_step,
+         "slip_sinkage_step(dug, rim, v_long, h, delta, cap) -> dug"),
+    FAST("kernel_sinkage_state", fn_kernel_sinkage_state,
+         "kernel_sinkage_state(constants, dug, rim, v_long, h, load_n) -> (dug, resistance_n)"),
     FAST("okello_h", fn_okello_h, "okello_h(x)"),
     FAST("exp_secant", fn_exp_secant, "exp_secant(y)"),
     FAST("janosi_forces", fn_janosi,

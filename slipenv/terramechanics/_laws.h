@@ -198,22 +198,65 @@ static inline double laws_bulldozing_per_width(double depth, double cohesion, do
     return d1 * (cohesion * depth + 0.5 * d2 * unit_weight * depth * depth);
 }
 
+/* Resistance [N] of a wheel dug a depth d >= 0 below its static rut z0 (sinkage), >= 0 and 0
+ * at d = 0: the Bekker compaction R_c = b k_eq z^(n+1)/(n+1) (Wong, Theory of Ground Vehicles,
+ * Ch. 5) grows from R_c0 (compaction, at z0) to R_c0 ((z0 + d)/z0)^(n+1), and the soil dug out
+ * is pushed ahead of the wheel's front of width b: b R_b(d) (laws_bulldozing_per_width). */
+static inline double laws_dug_resistance(double dug, double compaction, double n,
+                                         double sinkage, double width, double cohesion,
+                                         double phi, double unit_weight)
+{
+    if (!(dug > 0.0))
+        return 0.0;
+    double extra = width * laws_bulldozing_per_width(dug, cohesion, phi, unit_weight);
+    if (compaction != 0.0 && sinkage > 0.0)
+        extra += compaction * (pow(1.0 + dug / sinkage, n + 1.0) - 1.0);
+    return extra;
+}
+
 /* Resistance a slipping wheel adds to its static one [N], >= 0 and 0 at zero slip: its
- * sinkage grows to z = z0 f(|s|) (laws_slip_sinkage_factor; Lyasko 2010), so the Bekker
- * compaction R_c = b k_eq z^(n+1)/(n+1) (Wong, Theory of Ground Vehicles, Ch. 5) grows to
- * R_c0 f^(n+1), and the soil the slip digs out below the static rut, depth z0 (f - 1), is
- * pushed ahead of the wheel's front of width b: b R_b(z0 (f - 1)) (laws_bulldozing_per_width).
- * compaction = R_c0 at the static sinkage z0 (sinkage). Braking or locked (s < 0) is taken
- * as the slip of the same magnitude (Lyasko measured driven wheels; the soil under a skidding
- * wheel is sheared and dug out the same way). */
+ * sinkage grows to z = z0 f(|s|) (laws_slip_sinkage_factor; Lyasko 2010), i.e. it is dug
+ * d = z0 (f - 1) below its static rut: laws_dug_resistance at that depth. Braking or locked
+ * (s < 0) is taken as the slip of the same magnitude (Lyasko measured driven wheels; the soil
+ * under a skidding wheel is sheared and dug out the same way). */
 static inline double laws_slip_sinkage_resistance(double slip, double compaction, double n,
                                                   double sinkage, double width,
                                                   double cohesion, double phi,
                                                   double unit_weight)
 {
     double f = laws_slip_sinkage_factor(fabs(slip));
-    return compaction * (pow(f, n + 1.0) - 1.0)
-           + width * laws_bulldozing_per_width(sinkage * (f - 1.0), cohesion, phi, unit_weight);
+    return laws_dug_resistance(sinkage * (f - 1.0), compaction, n, sinkage, width, cohesion,
+                               phi, unit_weight);
+}
+
+/* Distance rates [m/s] of a wheel over its ground: the rim slides over the soil at
+ * |r omega - v| and rolls onto fresh soil at v_roll = min(|r omega|, |v|) when r omega and v
+ * point the same way, else 0 (a locked or counter-spinning wheel rolls onto nothing). */
+static inline void laws_slide_and_roll(double rim, double v_long, double *slide, double *roll)
+{
+    *slide = fabs(rim - v_long);
+    *roll = rim * v_long > 0.0 ? (fabs(rim) < fabs(v_long) ? fabs(rim) : fabs(v_long)) : 0.0;
+}
+
+/* One backward-Euler step of the depth d [m] a wheel has dug below its static rut: slip
+ * sinkage as the soil a slipping rim carries out from under its patch to its rear (the
+ * excavation behind slip sinkage, Lyasko, J. Terramech. 47 (2010) 21-31), as a state. A mass
+ * balance over the patch of length sigma: the rim drags a soil layer whose flux
+ * per unit width is delta |r omega - v| out of the patch, and rolling onto fresh soil at
+ * v_roll (laws_slide_and_roll) replaces the patch's soil with undug soil,
+ *     sigma dd/dt = delta |r omega - v| - v_roll d,   d in [0, cap].
+ * It grows with the distance slid and relaxes as exp(-x/sigma) over the distance x rolled; its
+ * steady state is d = delta |r omega - v|/v_roll = delta |s|/(1 - |s|) (|s| < 1, Wong's slip,
+ * drive or braking); with nothing rolled (spinning in place, locked and skidding) it grows
+ * until cap. With h = dt/sigma: d' = (d + h delta |r omega - v|)/(1 + h v_roll), clipped to
+ * [0, cap]. */
+static inline double laws_slip_sinkage_step(double dug, double rim, double v_long, double h,
+                                            double delta, double cap)
+{
+    double slide, roll;
+    laws_slide_and_roll(rim, v_long, &slide, &roll);
+    double d = (dug + h * delta * slide) / (1.0 + h * roll);
+    return d < cap ? (d > 0.0 ? d : 0.0) : (cap > 0.0 ? cap : 0.0);
 }
 
 /* -- force laws (janosi.py, lindgren.py, reina.py) -------------------------------------- */
@@ -323,6 +366,9 @@ typedef struct {
     double ss_gamma, ss_exponent;      /* the wheel's Bekker compaction gamma W^e */
     double width, diameter, k_c, k_phi, n; /* its static sinkage (laws_wheel_sinkage) */
     double cohesion, phi, unit_weight; /* bulldozing (laws_bulldozing_per_width) */
+    int sinkage_state;                 /* the simulation's dug-depth state adds the slip
+                                          sinkage (laws_slip_sinkage_step), not the kernel */
+    double excavation;                 /* delta [m] of laws_slip_sinkage_step */
 } LawsKernel;
 
 /* (fx, fy, resistance) [N] of one wheel: the model's force law, plus its motion resistance
@@ -352,6 +398,24 @@ static inline void laws_kernel(const LawsKernel *k, double slip, double tan_beta
     if (k->gross)
         *fx += laws_reina_gross_extra(slip, tan_beta, load, k->gamma, k->exponent,
                                       k->gross_c_x, k->mu, k->scaled ? k->gross_w_ref : load);
+}
+
+/* The slip-sinkage state of one wheel over one substep (k->sinkage_state): steps its dug depth
+ * *dug (laws_slip_sinkage_step with delta = k->excavation, capped where the wheel is buried to
+ * its axle, d = D/2 - z0, z0 its static sinkage under this load) and returns the resistance
+ * that depth adds (laws_dug_resistance). h = dt/sigma, rim = r omega. */
+static inline double laws_kernel_sinkage_state(const LawsKernel *k, double *dug, double rim,
+                                               double v_long, double h, double load)
+{
+    if (!k->sinkage_state || !(load > 0.0)) {
+        *dug = 0.0;
+        return 0.0;
+    }
+    double z0 = laws_wheel_sinkage(load, k->width, k->diameter, k->k_c, k->k_phi, k->n);
+    *dug = laws_slip_sinkage_step(*dug, rim, v_long, h, k->excavation, 0.5 * k->diameter - z0);
+    double rc0 = laws_motion_resistance(load, 0.0, k->ss_gamma, k->ss_exponent);
+    return laws_dug_resistance(*dug, rc0, k->n, z0, k->width, k->cohesion, k->phi,
+                               k->unit_weight);
 }
 
 /* Resistance [N] of a wheel in the rut of the wheel ahead: the rolling term f_r W whole, the
@@ -417,16 +481,17 @@ static inline int laws_contact_frame(const double patch[6], double load, const d
 #ifdef Py_PYTHON_H
 /* Read a KernelConstants tuple (kind, ac, tan_phi, ratio, kappa, mu, c_x, c_y, a_x, a_y,
  * scaled, gross, gross_c_x, gross_w_ref, f_r, gamma, exponent, slip_sinkage, ss_gamma,
- * ss_exponent, width, diameter, k_c, k_phi, n, cohesion, phi, unit_weight) into k; -1 with an
- * exception. */
+ * ss_exponent, width, diameter, k_c, k_phi, n, cohesion, phi, unit_weight, sinkage_state,
+ * excavation) into k; -1 with an exception. */
 static int laws_parse_kernel(PyObject *constants, LawsKernel *k)
 {
-    if (!PyArg_ParseTuple(constants, "idddddddddppdddddpdddddddddd;kernel constants", &k->kind,
-                          &k->ac, &k->tan_phi, &k->ratio, &k->kappa, &k->mu, &k->c_x, &k->c_y,
-                          &k->a_x, &k->a_y, &k->scaled, &k->gross, &k->gross_c_x,
+    if (!PyArg_ParseTuple(constants, "idddddddddppdddddpddddddddddpd;kernel constants",
+                          &k->kind, &k->ac, &k->tan_phi, &k->ratio, &k->kappa, &k->mu, &k->c_x,
+                          &k->c_y, &k->a_x, &k->a_y, &k->scaled, &k->gross, &k->gross_c_x,
                           &k->gross_w_ref, &k->f_r, &k->gamma, &k->exponent, &k->slip_sinkage,
                           &k->ss_gamma, &k->ss_exponent, &k->width, &k->diameter, &k->k_c,
-                          &k->k_phi, &k->n, &k->cohesion, &k->phi, &k->unit_weight))
+                          &k->k_phi, &k->n, &k->cohesion, &k->phi, &k->unit_weight,
+                          &k->sinkage_state, &k->excavation))
         return -1;
     if (k->kind < LAWS_JANOSI || k->kind > LAWS_REINA) {
         PyErr_Format(PyExc_ValueError, "unknown force law kind %d", k->kind);

@@ -34,10 +34,11 @@ from slipenv.terramechanics.contact import ContactGeometry
 from slipenv.terramechanics.soil import SoilParams
 from slipenv.terramechanics.vectorize import Kernel, forces_on_arrays
 
-__all__ = ["DEFAULT_UNIT_WEIGHT_N_M3", "SLIP_SINKAGE_MODES", "ForceModel", "JanosiForceModel",
-           "KernelConstants", "LinearSlipForceModel", "ReinaForceModel", "FORCE_MODELS",
-           "force_model_by_name", "slip_angle_convention", "slip_sinkage_resistance",
-           "wheel_kernel"]
+__all__ = ["DEFAULT_EXCAVATION_DEPTH_M", "DEFAULT_UNIT_WEIGHT_N_M3", "SLIP_SINKAGE_MODES",
+           "WHEEL_SLIP_SINKAGE", "ForceModel", "JanosiForceModel", "KernelConstants",
+           "LinearSlipForceModel", "ReinaForceModel", "FORCE_MODELS", "dug_depth_resistance",
+           "dug_depth_step", "force_model_by_name", "slip_angle_convention",
+           "slip_sinkage_resistance", "wheel_kernel"]
 
 
 @runtime_checkable
@@ -145,13 +146,33 @@ class KernelConstants(NamedTuple):
     cohesion_pa: float = 0.0  # c, phi, gamma_s of the bulldozing (`sidewall`)
     friction_angle_rad: float = 0.0
     unit_weight_n_m3: float = 0.0
+    sinkage_state: bool = False  # the simulation's dug-depth state (`dug_depth_step`)
+    excavation_depth_m: float = 0.0  # delta [m] of `dug_depth_step`
 
 
-SLIP_SINKAGE_MODES = (None, "bulldozing", "full")
-"""Values of the models' ``slip_sinkage`` option (`slip_sinkage_resistance`): None, off (the
-resistance at the static sinkage only); ``"bulldozing"``, the soil the slip digs out below the
-static rut is bulldozed ahead of the wheel; ``"full"``, that plus the Bekker compaction at the
-slip sinkage."""
+SLIP_SINKAGE_MODES = (None, "bulldozing", "full", "accumulated")
+"""Values of the models' ``slip_sinkage`` option: None, off (the resistance at the static
+sinkage only); ``"bulldozing"``, the soil the slip digs out below the static rut, Lyasko's
+instantaneous slip sinkage, is bulldozed ahead of the wheel (`slip_sinkage_resistance`);
+``"full"``, that plus the Bekker compaction at the slip sinkage; ``"accumulated"``, the depth
+dug is a state of each wheel that grows with the distance slid and relaxes over the distance
+rolled (`dug_depth_step`), and that soil is bulldozed ahead of the wheel
+(`dug_depth_resistance`)."""
+
+WHEEL_SLIP_SINKAGE: str | None = "accumulated"
+"""The models' default ``slip_sinkage`` (`SLIP_SINKAGE_MODES`) for a wheel's contact (a
+track's contact never takes it: `slipenv.terramechanics.track` has its own law); on rigid
+ground every mode is off."""
+
+DEFAULT_EXCAVATION_DEPTH_M = 2e-3
+"""delta [m] of the ``"accumulated"`` slip sinkage (`dug_depth_step`): the depth a wheel digs
+per patch length it slides. The slipping rim drags the soil of a shear band of thickness t_b,
+whose speed falls linearly from the slip speed at the rim to 0 below it, so it carries
+t_b |r omega - v|/2 per unit width out through the rear of its patch; spread over the patch
+length sigma that lowers the patch at t_b |r omega - v|/(2 sigma): delta = t_b/2. The band in
+sand is 10-20 grain diameters thick (Roscoe, Geotechnique 20(2), 1970; about 16 d50 in
+Muhlhaus and Vardoulakis, Geotechnique 37(3), 1987); 2 mm is half of 16 d50 at d50 = 0.25 mm,
+a medium-fine sand (assumed: slipenv's soils carry no grain size)."""
 
 DEFAULT_UNIT_WEIGHT_N_M3 = 1.5e3 * 9.81
 """Soil unit weight gamma_s [N/m^3] of the bulldozing term when none is given: a dry sand of
@@ -184,6 +205,43 @@ def slip_sinkage_resistance(slip: float, load_n: float, constants: KernelConstan
                                            c.friction_angle_rad, c.unit_weight_n_m3)
 
 
+def dug_depth_step(dug_m: float, rim_mps: float, v_long_mps: float, dt_over_sigma: float,
+                   delta_m: float, cap_m: float) -> float:
+    """One substep of the depth [m] a wheel has dug below its static rut (slip sinkage as a
+    state): sigma dd/dt = delta |r omega - v| - v_roll d, clipped to [0, cap].
+
+    A slipping rim carries soil out from under its patch to its rear, the excavation behind
+    slip sinkage (Lyasko, J. Terramech. 47 (2010) 21-31); the rate law is that mass balance
+    over the patch: delta [m] is the depth dug per patch length sigma slid
+    (`DEFAULT_EXCAVATION_DEPTH_M`), so the depth grows with the distance slid. Rolling onto
+    fresh soil at v_roll = min(|r omega|, |v|) (r omega and v the same way, else 0) replaces
+    the patch over one patch length: the depth relaxes as exp(-x/sigma) over the distance x
+    rolled. Steady state d = delta s/(1 - |s|) (Wong's slip s, |s| < 1, drive or braking); a
+    wheel spinning in place or locked and skidding rolls onto nothing and digs until `cap_m`.
+    Backward Euler with h = dt/sigma: d' = (d + h delta |r omega - v|)/(1 + h v_roll). The C
+    law ``laws_slip_sinkage_step`` of ``_laws.h``, which the simulation runs.
+    """
+    return _laws.slip_sinkage_step(dug_m, rim_mps, v_long_mps, dt_over_sigma, delta_m, cap_m)
+
+
+def dug_depth_resistance(dug_m: float, load_n: float, constants: KernelConstants) -> float:
+    """Resistance [N] a wheel dug `dug_m` below its static rut adds to its static one.
+
+    The dug soil is bulldozed ahead of the wheel's front, b R_b(d) (Bekker, Theory of Land
+    Locomotion, 1956, pp. 280-282; `sidewall.bulldozing_resistance_n_per_m`), and, where the
+    constants carry the wheel's compaction (``sinkage_gamma``), the Bekker compaction grows
+    from R_c0 to R_c0 ((z0 + d)/z0)^(n+1) (Wong, Theory of Ground Vehicles, Ch. 5), z0 the
+    static sinkage at `load_n`. The C law ``laws_dug_resistance``; 0 at d = 0 or W <= 0.
+    """
+    c = constants
+    if load_n <= 0.0:
+        return 0.0
+    z0 = _laws.wheel_sinkage_m(load_n, c.width_m, c.diameter_m, c.k_c, c.k_phi, c.n_exp)
+    rc0 = _laws.motion_resistance_n(load_n, 0.0, c.sinkage_gamma, c.sinkage_exponent)
+    return _laws.dug_resistance_n(dug_m, rc0, c.n_exp, z0, c.width_m, c.cohesion_pa,
+                                  c.friction_angle_rad, c.unit_weight_n_m3)
+
+
 class _PatchModel(ABC):
     """Kernel assembly, Bekker + rolling resistance and the derived array interface.
 
@@ -196,8 +254,10 @@ class _PatchModel(ABC):
     slip_angle_convention = "sliding"
 
     def __init__(self, geometry: ContactGeometry, rolling_resistance_coeff: float = 0.01,
-                 lateral_stiffness_ratio: float = 1.0, slip_sinkage: str | None = None,
-                 soil_unit_weight_n_m3: float = DEFAULT_UNIT_WEIGHT_N_M3) -> None:
+                 lateral_stiffness_ratio: float = 1.0,
+                 slip_sinkage: str | None = WHEEL_SLIP_SINKAGE,
+                 soil_unit_weight_n_m3: float = DEFAULT_UNIT_WEIGHT_N_M3,
+                 excavation_depth_m: float = DEFAULT_EXCAVATION_DEPTH_M) -> None:
         if not isinstance(geometry, ContactGeometry):
             raise TypeError(f"geometry must be a ContactGeometry, got {type(geometry).__name__}")
         coeff = float(rolling_resistance_coeff)
@@ -212,9 +272,15 @@ class _PatchModel(ABC):
         if not (math.isfinite(unit_weight) and unit_weight >= 0.0):
             raise ValueError(f"soil_unit_weight_n_m3={soil_unit_weight_n_m3!r} must be finite "
                              "and >= 0")
+        excavation = float(excavation_depth_m)
+        if not (math.isfinite(excavation) and excavation >= 0.0):
+            raise ValueError(f"excavation_depth_m={excavation_depth_m!r} must be finite and "
+                             ">= 0")
         if slip_sinkage not in SLIP_SINKAGE_MODES:
             raise ValueError(f"slip_sinkage={slip_sinkage!r} must be one of "
                              f"{SLIP_SINKAGE_MODES!r}")
+        if geometry.is_track and slip_sinkage == WHEEL_SLIP_SINKAGE:
+            slip_sinkage = None  # the wheels' default; a track's contact has its own law
         if slip_sinkage is not None and geometry.is_track:
             raise ValueError("slip_sinkage is the rigid wheel's law; a track's contact "
                              "(ContactGeometry.track_length_m) has its own "
@@ -224,6 +290,7 @@ class _PatchModel(ABC):
         self.lateral_stiffness_ratio = ratio
         self.slip_sinkage = slip_sinkage
         self.soil_unit_weight_n_m3 = unit_weight
+        self.excavation_depth_m = excavation
 
     @abstractmethod
     def _forces(self, soil: SoilParams) -> Callable[[float, float, float], tuple[float, float]]:
@@ -271,8 +338,10 @@ class _PatchModel(ABC):
         g = self.geometry
         gamma, exponent = wheel_compaction_law(g.width_m, 2.0 * g.radius_m, soil.k_c,
                                                soil.k_phi, soil.n_exp, deformable)
-        return {"slip_sinkage": True,
-                "sinkage_gamma": 0.0 if self.slip_sinkage == "bulldozing" else float(gamma),
+        state = self.slip_sinkage == "accumulated"
+        return {"slip_sinkage": not state, "sinkage_state": state,
+                "excavation_depth_m": self.excavation_depth_m if state else 0.0,
+                "sinkage_gamma": float(gamma) if self.slip_sinkage == "full" else 0.0,
                 "sinkage_exponent": float(exponent), "width_m": float(g.width_m),
                 "diameter_m": 2.0 * float(g.radius_m), "k_c": float(soil.k_c),
                 "k_phi": float(soil.k_phi), "n_exp": float(soil.n_exp),
@@ -371,6 +440,8 @@ class _PatchModel(ABC):
         if self.slip_sinkage is not None:
             aniso += (f", slip_sinkage={self.slip_sinkage!r}, "
                       f"soil_unit_weight_n_m3={self.soil_unit_weight_n_m3!r}")
+        if self.slip_sinkage == "accumulated":
+            aniso += f", excavation_depth_m={self.excavation_depth_m!r}"
         return (f"{type(self).__name__}({self.geometry!r}, "
                 f"rolling_resistance_coeff={self.rolling_resistance_coeff!r}{aniso})")
 
@@ -410,18 +481,28 @@ class JanosiForceModel(_PatchModel):
         kappa [-], > 0: the soil's lateral small-slip stiffness over its longitudinal one
         (`janosi.janosi_forces`, lateral anisotropy; Reina measured C_y/C_x = 3.6 on loose
         soil, Reina Table 3). Default 1, isotropic: no slipenv soil has a measured value.
-    slip_sinkage : None | "bulldozing" | "full"
-        Resistance added by slip (`slip_sinkage_resistance`, `SLIP_SINKAGE_MODES`): None
-        (default) the resistance at the static sinkage only; ``"bulldozing"`` the soil a
-        slipping or skidding wheel digs out below its static rut (Lyasko's slip sinkage) is
-        bulldozed ahead of its front (Bekker); ``"full"`` also the Bekker compaction at the
-        slip sinkage. Rigid wheels only (a track's contact raises ValueError). Off by default,
-        as measured: with ``"bulldozing"`` the rover and the Husky dig in and stall on 10 deg
-        loose slopes they climb without it at slip 0.3-0.6 (a step to full speed, slip
-        0.7-0.8 for 0.1 s, digs them in on the flat too); ``"full"`` stalls every wheeled
-        vehicle on the flat (Lyasko's compaction grows with slip faster than the traction).
+    slip_sinkage : None | "bulldozing" | "full" | "accumulated"
+        Resistance added by slip (`SLIP_SINKAGE_MODES`): None (default) the resistance at the
+        static sinkage only; ``"bulldozing"`` the soil a slipping or skidding wheel digs out
+        below its static rut (Lyasko's slip sinkage, instantaneous in slip:
+        `slip_sinkage_resistance`) is bulldozed ahead of its front (Bekker); ``"full"`` also
+        the Bekker compaction at the slip sinkage; ``"accumulated"`` the depth dug is a state
+        of each wheel in the simulation, growing with the distance slid and relaxing over the
+        distance rolled (`dug_depth_step`), bulldozed ahead of the front
+        (`dug_depth_resistance`; the kernel itself has no memory and adds nothing). Rigid
+        wheels only (a track's contact raises ValueError); the state runs for slipenv's own
+        laws (a subclass's Python kernel gets none). Measured, rover and Husky on loose
+        sand, 10 s at full command: ``"bulldozing"`` stalls them on 10 deg slopes they climb
+        without it at slip 0.44-0.60 (the Husky on the flat too: the launch at slip 0.7-0.9
+        digs it in), ``"full"`` stalls every wheeled vehicle on the flat;
+        ``"accumulated"`` moves their speed by at most 0.2 % on the flat and 0.7-6.6 % on
+        10 deg (the Husky's slip 0.60 -> 0.63), and stops the rover commanded up 20 deg, or
+        braked on 20-25 deg, after it has slid 0.35-1.0 m.
     soil_unit_weight_n_m3 : float
         gamma_s [N/m^3] >= 0 of the bulldozing term; default `DEFAULT_UNIT_WEIGHT_N_M3`.
+    excavation_depth_m : float
+        delta [m] >= 0 of the ``"accumulated"`` state, the depth dug per patch length slid;
+        default `DEFAULT_EXCAVATION_DEPTH_M`.
     """
 
     _COMPILED_KIND = 0
@@ -481,10 +562,12 @@ class ReinaForceModel(_PatchModel):
         i.e. mu raised to mu + R_c/W), so that thrust minus R_c gives back the measured net
         curve at high slip and -R_c (a freely rolling wheel cutting a rut) at zero slip.
         The lateral force stays Eq. 6-9.
-    slip_sinkage, soil_unit_weight_n_m3
+    slip_sinkage, soil_unit_weight_n_m3, excavation_depth_m
         As in `JanosiForceModel`. Reina's curve is a measured net force, which holds the
-        slip sinkage over the slips it was measured at; the option adds it again there, and
-        is meant for the slips beyond (a wheel spinning or locked on a slope).
+        slip sinkage over the slips it was measured at; the instantaneous modes add it again
+        there, and are meant for the slips beyond (a wheel spinning or locked on a slope);
+        ``"accumulated"`` adds a few millimetres at those slips (delta s/(1 - s)) and digs
+        without bound only where the wheel stops rolling.
 
     Notes
     -----
@@ -499,10 +582,12 @@ class ReinaForceModel(_PatchModel):
 
     def __init__(self, geometry: ContactGeometry, rolling_resistance_coeff: float = 0.01,
                  scale_stiffness_with_load: bool = True, compaction: bool = False,
-                 slip_sinkage: str | None = None,
-                 soil_unit_weight_n_m3: float = DEFAULT_UNIT_WEIGHT_N_M3) -> None:
+                 slip_sinkage: str | None = WHEEL_SLIP_SINKAGE,
+                 soil_unit_weight_n_m3: float = DEFAULT_UNIT_WEIGHT_N_M3,
+                 excavation_depth_m: float = DEFAULT_EXCAVATION_DEPTH_M) -> None:
         super().__init__(geometry, rolling_resistance_coeff, slip_sinkage=slip_sinkage,
-                         soil_unit_weight_n_m3=soil_unit_weight_n_m3)
+                         soil_unit_weight_n_m3=soil_unit_weight_n_m3,
+                         excavation_depth_m=excavation_depth_m)
         self.scale_stiffness_with_load = bool(scale_stiffness_with_load)
         self.compaction = bool(compaction)
 

@@ -5,8 +5,10 @@ at once (arrays of shape (n_tracks, n_cells)). They are the model's only text: t
 (``slipenv.sim.track_soil``) composes them once per physics substep, and the tests check them
 against the closed forms. The local soil laws they share with the wheels (Mohr-Coulomb,
 Janosi-Hanamoto, Bekker) are `janosi`'s and `bekker`'s, imported here. The fields are small,
-so the cost is numpy's per-call overhead: the functions update their states in place and keep
-the number of array operations low.
+so in numpy the cost would be the per-call overhead: the functions are loops over the cells,
+compiled with numba from this text (``@njit(cache=True)``; `track_substep` composes them into
+one compiled call per substep; ``slipenv.sim.track_soil.warm_up`` compiles or loads them).
+``NUMBA_DISABLE_JIT=1`` runs the same text as plain Python.
 
 Frame: the hull frame projected on the ground, x forward, y left, origin at the hull reference
 point; a track at lateral offset y_i, contact -L/2 <= x <= L/2, width b. The belt moves
@@ -63,7 +65,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
+from slipenv.terramechanics.bekker import compaction_resistance_n, pressure_sinkage_m
 from slipenv.terramechanics.bekker import slip_sinkage_factor as bekker_slip_sinkage
 from slipenv.terramechanics.janosi import janosi_stress_pa, shear_strength_pa
 
@@ -82,9 +86,13 @@ __all__ = [
     "slip_sinkage_factor",
     "rut_resistance_n",
     "passive_pressure_n_per_m",
+    "passive_coefficient",
     "berm_height_m",
     "advance_wall",
     "wall_force_n_per_m",
+    "SOIL_ROWS",
+    "SETTING_NAMES",
+    "track_substep",
 ]
 
 DIRECTION_SPEED_MPS = 2e-3
@@ -99,7 +107,23 @@ GROUND_SPEED_MPS = 1e-4
 """[m/s] Ground speeds below this leave the side walls and berms where they are."""
 
 _TINY = 1e-300  # guards the unit vectors of a zero displacement or stress
-_ROTATE = np.array([1.0, -1.0]).reshape(2, 1, 1)  # (x, y) components of Omega z x (y, x)
+
+# The shared soil laws, compiled from their one text (`janosi`, `bekker`) for the cell loops.
+_strength = njit(cache=True)(shear_strength_pa)
+_janosi = njit(cache=True)(janosi_stress_pa)
+_pressure_sinkage = njit(cache=True)(pressure_sinkage_m)
+_compaction = njit(cache=True)(compaction_resistance_n)
+
+SOIL_ROWS = ("width_m", "inv_cell_area_m2", "k_c", "k_phi", "n_exp", "cohesion_pa", "tan_phi",
+             "shear_modulus_m", "friction_angle_rad")
+"""Rows of :func:`track_substep`'s ``soil`` array (one column per track): track width b,
+1/(b dx), Bekker's k_c, k_phi and n, cohesion c, tan phi, Janosi's K, phi."""
+(S_WIDTH, S_INV_AREA, S_KC, S_KPHI, S_N, S_C, S_TAN_PHI, S_K, S_PHI) = range(len(SOIL_ROWS))
+SETTING_NAMES = ("dx_m", "dt_s", "direction_length_m", "damping_ratio", "cell_mass_kg",
+                 "unit_weight_n_m3", "max_wall_height_m")
+"""Entries of :func:`track_substep`'s ``settings`` array: cell length, substep, e_max, the
+dampers' zeta and cell mass, the soil's unit weight, the wall height where soil spills."""
+(P_DX, P_DT, P_E_MAX, P_ZETA, P_CELL_MASS, P_GAMMA, P_MAX_WALL) = range(len(SETTING_NAMES))
 
 
 # -- normal pressure -------------------------------------------------------------------------
@@ -125,21 +149,26 @@ def load_spread_matrix(wheel_x_m: np.ndarray, cell_x_m: np.ndarray) -> np.ndarra
 
 
 # -- shear ---------------------------------------------------------------------------------
-def sliding_velocity(track_speed_mps, belt_speed_mps, lateral_speed_mps, yaw_rate_rad_s: float,
-                     x_cell_m: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+@njit(cache=True)
+def sliding_velocity(track_speed_mps: np.ndarray, belt_speed_mps: np.ndarray,
+                     lateral_speed_mps: np.ndarray, yaw_rate_rad_s: float, x_cell_m: np.ndarray,
+                     out: np.ndarray | None = None) -> np.ndarray:
     """Sliding velocity of the belt over the ground at the cell centres [m/s], (2, n_tracks,
     n_cells): v_j = (V_x,i - u_i, V_y,i + Omega x) (Wong & Chiang 2001; Wong Ch. 7).
 
     ``track_speed_mps`` V_x,i = V_x - Omega y_i (the ground speed of track i's centre line
     along the hull's x), ``belt_speed_mps`` u_i, ``lateral_speed_mps`` V_y,i (the hull's
-    lateral speed at the track's height), each of length n_tracks; ``x_cell_m`` (n_tracks,
+    lateral speed at the track's height), arrays of length n_tracks; ``x_cell_m`` (n_tracks,
     n_cells) the cell centres. Written into ``out`` when given.
     """
+    nt, nc = x_cell_m.shape
     if out is None:
-        out = np.empty((2,) + np.shape(x_cell_m))
-    out[0] = np.subtract(track_speed_mps, belt_speed_mps)[:, None]
-    np.multiply(x_cell_m, yaw_rate_rad_s, out=out[1])
-    out[1] += np.asarray(lateral_speed_mps, dtype=float)[:, None]
+        out = np.empty((2, nt, nc))
+    for i in range(nt):
+        slide = track_speed_mps[i] - belt_speed_mps[i]
+        for c in range(nc):
+            out[0, i, c] = slide
+            out[1, i, c] = x_cell_m[i, c] * yaw_rate_rad_s + lateral_speed_mps[i]
     return out
 
 
@@ -166,9 +195,10 @@ def shear_direction(vx, vy, jx, jy, v_reg: float = DIRECTION_SPEED_MPS):
     return dx * inv, dy * inv
 
 
-def advance_shear(j: np.ndarray, e: np.ndarray, v_cell: np.ndarray, belt_speed_mps,
+@njit(cache=True)
+def advance_shear(j: np.ndarray, e: np.ndarray, v_cell: np.ndarray, belt_speed_mps: np.ndarray,
                   yaw_rate_rad_s: float, dx_m: float, dt_s: float,
-                  direction_length_m) -> None:
+                  direction_length_m: float) -> None:
     """One explicit step of dj/dt - u dj/dx = v_j - Omega z x j on cell faces, and of the
     stress-direction state e (in place).
 
@@ -185,66 +215,66 @@ def advance_shear(j: np.ndarray, e: np.ndarray, v_cell: np.ndarray, belt_speed_m
     v_cell : ndarray, shape (2, n_tracks, n_cells)
         Sliding velocity of the belt over the ground at the cell centres [m/s]
         (:func:`sliding_velocity`).
-    belt_speed_mps : sequence of float, length n_tracks
+    belt_speed_mps : ndarray, shape (n_tracks,)
         u_i: belt speed along the ground run, > 0 when it moves rearwards (forward drive).
     yaw_rate_rad_s : float
         Omega [rad/s] (the rotation term keeps j in the ground frame while stored in hull axes;
         it produces Wong-Chiang's cos/sin terms).
     dx_m, dt_s : float
         Cell length [m] and time step [s] (|u| dt/dx < 1 for stability).
-    direction_length_m : float or ndarray (n_tracks, 1)
+    direction_length_m : float
         e_max [m], the sliding distance over which the stress direction turns.
 
     Upwinding: for u > 0 the front face is the entry (j = 0) and face f takes the flux from
     face f-1 with the source of the cell between them (midpoint rule: exact for the linear v_j
     of a rigid hull); for u < 0 mirrored; at |u| below ``UPWIND_SPEED_MPS`` every face
-    integrates the mean source of its neighbouring cells.
+    integrates the mean source of its neighbouring cells. Every source is taken from the
+    fields before the step.
     """
-    u = [float(ui) for ui in belt_speed_mps]
+    nt, nc = e.shape[1], e.shape[2]
     courant = dt_s / dx_m
-    # Sources, times dt: v_j plus the rotation of j (face means at the cells) and of e.
-    dv = dt_s * v_cell
-    src = (0.5 * yaw_rate_rad_s * dt_s * _ROTATE) * (j[..., :-1] + j[..., 1:])[::-1]
-    src += dv
-    e_src = (yaw_rate_rad_s * dt_s * _ROTATE) * e[::-1]
-    e_src += dv
-    if all(ui > UPWIND_SPEED_MPS for ui in u):  # both belts forward: the common case at once
-        a = np.array([ui * courant for ui in u])[:, None]
-        src += a * (j[..., :-1] - j[..., 1:])
-        j[..., 1:] += src
-        j[..., 0] = 0.0
-        e_src -= a * e
-        e_src[..., 1:] += a * e[..., :-1]
-        e += e_src
-    else:
-        for i, ui in enumerate(u):
-            _upwind_track(j[:, i], e[:, i], src[:, i], e_src[:, i], ui, abs(ui) * courant)
-    leak = np.hypot(v_cell[0], v_cell[1])
-    leak *= dt_s / direction_length_m
-    leak += 1.0
-    e /= leak
-
-
-def _upwind_track(j: np.ndarray, e: np.ndarray, src: np.ndarray, e_src: np.ndarray,
-                  u: float, a: float) -> None:
-    """:func:`advance_shear`'s step for one track (in place, before the relaxation): ``j`` (2,
-    n_cells + 1) at the faces, ``e`` (2, n_cells) at the centres, ``src``/``e_src`` their
-    sources times dt at the centres, ``a`` = |u| dt/dx."""
-    if u > UPWIND_SPEED_MPS:
-        j[:, 1:] += a * (j[:, :-1] - j[:, 1:]) + src
-        j[:, 0] = 0.0
-        e[:, 1:] += a * (e[:, :-1] - e[:, 1:]) + e_src[:, 1:]
-        e[:, 0] += e_src[:, 0] - a * e[:, 0]
-    elif u < -UPWIND_SPEED_MPS:
-        j[:, :-1] += a * (j[:, 1:] - j[:, :-1]) + src
-        j[:, -1] = 0.0
-        e[:, :-1] += a * (e[:, 1:] - e[:, :-1]) + e_src[:, :-1]
-        e[:, -1] += e_src[:, -1] - a * e[:, -1]
-    else:  # at rest: each face integrates the mean source of its neighbouring cells
-        j[:, 0] += src[:, 0]
-        j[:, 1:-1] += 0.5 * (src[:, :-1] + src[:, 1:])
-        j[:, -1] += src[:, -1]
-        e += e_src
+    rot = 0.5 * yaw_rate_rad_s * dt_s  # Omega z x j at a cell: the mean of its faces
+    rot_e = yaw_rate_rad_s * dt_s
+    leak_scale = dt_s / direction_length_m
+    src = np.empty((2, nc))
+    e_src = np.empty((2, nc))
+    for i in range(nt):
+        # Sources, times dt: v_j plus the rotation of j (face means at the cells) and of e.
+        for c in range(nc):
+            dvx = dt_s * v_cell[0, i, c]
+            dvy = dt_s * v_cell[1, i, c]
+            src[0, c] = rot * (j[1, i, c] + j[1, i, c + 1]) + dvx
+            src[1, c] = -rot * (j[0, i, c] + j[0, i, c + 1]) + dvy
+            e_src[0, c] = rot_e * e[1, i, c] + dvx
+            e_src[1, c] = -rot_e * e[0, i, c] + dvy
+        u = belt_speed_mps[i]
+        a = abs(u) * courant
+        for k in range(2):
+            if u > UPWIND_SPEED_MPS:  # entry at the front face: sweep rearwards from the rear
+                for f in range(nc, 0, -1):
+                    j[k, i, f] += a * (j[k, i, f - 1] - j[k, i, f]) + src[k, f - 1]
+                j[k, i, 0] = 0.0
+                for c in range(nc - 1, 0, -1):
+                    e[k, i, c] += a * (e[k, i, c - 1] - e[k, i, c]) + e_src[k, c]
+                e[k, i, 0] += e_src[k, 0] - a * e[k, i, 0]
+            elif u < -UPWIND_SPEED_MPS:  # mirrored: entry at the rear face
+                for f in range(nc):
+                    j[k, i, f] += a * (j[k, i, f + 1] - j[k, i, f]) + src[k, f]
+                j[k, i, nc] = 0.0
+                for c in range(nc - 1):
+                    e[k, i, c] += a * (e[k, i, c + 1] - e[k, i, c]) + e_src[k, c]
+                e[k, i, nc - 1] += e_src[k, nc - 1] - a * e[k, i, nc - 1]
+            else:  # at rest: each face integrates the mean source of its neighbouring cells
+                j[k, i, 0] += src[k, 0]
+                for f in range(1, nc):
+                    j[k, i, f] += 0.5 * (src[k, f - 1] + src[k, f])
+                j[k, i, nc] += src[k, nc - 1]
+                for c in range(nc):
+                    e[k, i, c] += e_src[k, c]
+        for c in range(nc):
+            leak = math.hypot(v_cell[0, i, c], v_cell[1, i, c]) * leak_scale + 1.0
+            e[0, i, c] /= leak
+            e[1, i, c] /= leak
 
 
 def steady_shear_displacement(x_m: np.ndarray, vx: float, vy: float, yaw_rate: float,
@@ -297,8 +327,10 @@ def steady_track_forces(vx: float, vy: float, yaw_rate: float, y_track_m: float,
             width_m * trap(x * ty - y_track_m * tx))
 
 
-def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m, dx_m: float,
-                cohesion_pa, tan_phi, shear_modulus_m,
+@njit(cache=True)
+def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: np.ndarray,
+                dx_m: float, cohesion_pa: np.ndarray, tan_phi: np.ndarray,
+                shear_modulus_m: np.ndarray,
                 out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Shear force of each cell on the track and its tangent stiffness.
 
@@ -307,24 +339,32 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m, 
     (`shear_strength_pa`), directed against e; the force
     f = -tau e/|e| b dx (midpoint rule) [N], shape (2, n_tracks, n_cells), written into
     ``out`` when given. The stiffness k = b dx d tau/d|j| = b dx (q_max - tau)/K [N/m], shape
-    (n_tracks, n_cells), is what :func:`soil_damper_forces` needs.
+    (n_tracks, n_cells), is what :func:`soil_damper_forces` needs. The soil (``width_m``,
+    ``cohesion_pa``, ``tan_phi``, ``shear_modulus_m``) is given per track, arrays of length
+    n_tracks.
     """
-    jc = j[..., :-1] + j[..., 1:]
-    j_abs = np.hypot(jc[0], jc[1])
-    j_abs *= 0.5
-    area = width_m * dx_m
-    strength = shear_strength_pa(pressure_pa, cohesion_pa, tan_phi)
-    tau = janosi_stress_pa(j_abs, strength, shear_modulus_m)
-    stiffness = strength - tau
-    stiffness *= area / shear_modulus_m
-    tau *= -area
-    tau /= np.maximum(np.hypot(e[0], e[1]), _TINY)
-    return np.multiply(e, tau, out=out), stiffness
+    nt, nc = e.shape[1], e.shape[2]
+    if out is None:
+        out = np.empty((2, nt, nc))
+    stiffness = np.empty((nt, nc))
+    for i in range(nt):
+        area = width_m[i] * dx_m
+        spring = area / shear_modulus_m[i]
+        for c in range(nc):
+            j_abs = math.hypot(j[0, i, c] + j[0, i, c + 1], j[1, i, c] + j[1, i, c + 1]) * 0.5
+            strength = _strength(pressure_pa[i, c], cohesion_pa[i], tan_phi[i])
+            tau = _janosi(j_abs, strength, shear_modulus_m[i])
+            stiffness[i, c] = (strength - tau) * spring
+            scale = tau * -area / max(math.hypot(e[0, i, c], e[1, i, c]), _TINY)
+            out[0, i, c] = e[0, i, c] * scale
+            out[1, i, c] = e[1, i, c] * scale
+    return out, stiffness
 
 
+@njit(cache=True)
 def soil_damper_forces(dj_m: np.ndarray, shear_force_n: np.ndarray,
-                       stiffness_n_per_m: np.ndarray, direction_length_m, damping_ratio: float,
-                       cell_mass_kg: float, dt_s: float) -> np.ndarray:
+                       stiffness_n_per_m: np.ndarray, direction_length_m: float,
+                       damping_ratio: float, cell_mass_kg: float, dt_s: float) -> np.ndarray:
     """Kelvin-Voigt dampers of the soil springs at rest, per cell [N], shape of ``dj_m``.
 
     The damper acts on the change ``dj_m`` (2, n_tracks, n_cells) of each cell's displacement
@@ -336,22 +376,25 @@ def soil_damper_forces(dj_m: np.ndarray, shear_force_n: np.ndarray,
     is 2 zeta sqrt(k m) for the cell's mass share m, capped at half the explicit stability
     limit m/dt. A cell without stress has only the across part, which is then zero.
     """
-    tau = np.hypot(shear_force_n[0], shear_force_n[1])
-    rate = np.empty((2,) + tau.shape)  # damping coefficients / dt, along and across
-    rate[0] = stiffness_n_per_m
-    np.multiply(tau, 1.0 / direction_length_m, out=rate[1])
-    np.sqrt(rate, out=rate)
-    rate *= 2.0 * damping_ratio * math.sqrt(cell_mass_kg)
-    np.minimum(rate, 0.5 * cell_mass_kg / dt_s, out=rate)
-    rate *= -1.0 / dt_s
-    n_hat = shear_force_n * (-1.0 / np.maximum(tau, _TINY))  # along the stress (0 if none)
-    along = dj_m[0] * n_hat[0]
-    along += dj_m[1] * n_hat[1]
-    dj_along = along * n_hat
-    force = dj_m - dj_along
-    force *= rate[1]
-    dj_along *= rate[0]
-    force += dj_along
+    nt, nc = dj_m.shape[1], dj_m.shape[2]
+    force = np.empty((2, nt, nc))
+    gain = 2.0 * damping_ratio * math.sqrt(cell_mass_kg)
+    cap = 0.5 * cell_mass_kg / dt_s
+    per_step = -1.0 / dt_s
+    inv_e = 1.0 / direction_length_m
+    for i in range(nt):
+        for c in range(nc):
+            fx, fy = shear_force_n[0, i, c], shear_force_n[1, i, c]
+            tau = math.hypot(fx, fy)
+            # damping coefficients / dt, along and across the stress
+            along_rate = min(math.sqrt(stiffness_n_per_m[i, c]) * gain, cap) * per_step
+            across_rate = min(math.sqrt(tau * inv_e) * gain, cap) * per_step
+            inv_tau = -1.0 / max(tau, _TINY)  # along the stress (0 if none)
+            nx, ny = fx * inv_tau, fy * inv_tau
+            along = dj_m[0, i, c] * nx + dj_m[1, i, c] * ny
+            ax, ay = along * nx, along * ny
+            force[0, i, c] = (dj_m[0, i, c] - ax) * across_rate + ax * along_rate
+            force[1, i, c] = (dj_m[1, i, c] - ay) * across_rate + ay * along_rate
     return force
 
 
@@ -364,6 +407,7 @@ def slip_sinkage_factor(slip):
     return np.array([bekker_slip_sinkage(float(i)) for i in slip.ravel()]).reshape(slip.shape)
 
 
+@njit(cache=True)
 def rut_resistance_n(resistance_n: float, travel_m: float, cut_front_m: float,
                      cut_rear_m: float, speed_mps: float,
                      v_reg_mps: float) -> tuple[float, float, float]:
@@ -386,28 +430,32 @@ def rut_resistance_n(resistance_n: float, travel_m: float, cut_front_m: float,
 
 
 # -- side wall ------------------------------------------------------------------------------
-def passive_pressure_n_per_m(height_m, unit_weight_n_m3: float, cohesion_pa,
-                             friction_angle_rad, n_phi=None):
+@njit(cache=True)
+def passive_pressure_n_per_m(height_m: float, unit_weight_n_m3: float, cohesion_pa: float,
+                             n_phi: float) -> float:
     """Rankine passive thrust per unit wall length P = 1/2 gamma h^2 N_phi + 2 c h sqrt(N_phi)
-    [N/m], N_phi = tan^2(45 deg + phi/2) (Wong Ch. 2, passive earth pressure). Broadcasts;
-    ``n_phi`` may be given precomputed."""
-    if n_phi is None:
-        n_phi = np.tan(math.pi / 4.0 + np.asarray(friction_angle_rad) / 2.0) ** 2
-    h = np.maximum(height_m, 0.0)
-    p = h * (0.5 * unit_weight_n_m3 * n_phi)
-    p += 2.0 * cohesion_pa * np.sqrt(n_phi)
-    p *= h
-    return p
+    [N/m] of a wall of height h (negative counts as 0), N_phi = tan^2(45 deg + phi/2)
+    (`passive_coefficient`; Wong Ch. 2, passive earth pressure)."""
+    h = max(height_m, 0.0)
+    return (h * (0.5 * unit_weight_n_m3 * n_phi) + 2.0 * cohesion_pa * math.sqrt(n_phi)) * h
 
 
-def berm_height_m(area_m2, repose_rad):
+@njit(cache=True)
+def passive_coefficient(friction_angle_rad: float) -> float:
+    """Rankine's passive earth pressure coefficient N_phi = tan^2(45 deg + phi/2) (Wong Ch. 2)."""
+    return math.tan(math.pi / 4.0 + friction_angle_rad / 2.0) ** 2
+
+
+@njit(cache=True)
+def berm_height_m(area_m2: float, repose_rad: float) -> float:
     """Height of a triangular berm of cross-section A at the angle of repose alpha against a
     vertical wall: A = h^2 / (2 tan alpha), so h = sqrt(2 A tan alpha) [m]."""
-    return np.sqrt(np.maximum(area_m2, 0.0) * (2.0 * np.tan(repose_rad)))
+    return math.sqrt(max(area_m2, 0.0) * (2.0 * math.tan(repose_rad)))
 
 
-def advance_wall(walls: np.ndarray, vy_cell: np.ndarray, ground_speed_mps, sinkage_m: np.ndarray,
-                 dx_m: float, dt_s: float) -> None:
+@njit(cache=True)
+def advance_wall(walls: np.ndarray, vy_cell: np.ndarray, ground_speed_mps: np.ndarray,
+                 sinkage_m: np.ndarray, dx_m: float, dt_s: float) -> None:
     """Advance the side walls' penetration d [m] and the berms [m^2] (in place).
 
     ``walls`` has shape (2, 2, n_tracks, n_cells): ``walls[0]`` the penetration d,
@@ -421,54 +469,142 @@ def advance_wall(walls: np.ndarray, vy_cell: np.ndarray, ground_speed_mps, sinka
     moment). ``ground_speed_mps`` (V_x of each track) has length n_tracks, ``vy_cell`` and
     ``sinkage_m`` shape (n_tracks, n_cells).
     """
-    v = [float(vi) for vi in ground_speed_mps]
+    nt, nc = vy_cell.shape
     courant = dt_s / dx_m
-    if all(vi > GROUND_SPEED_MPS for vi in v):  # the common case, all tracks at once
-        a = np.array([min(vi * courant, 1.0) for vi in v])[:, None]
-        inflow = a * walls[..., :-1]
-        walls *= 1.0 - a
-        walls[..., 1:] += inflow
-    else:
-        for i, vi in enumerate(v):
-            ai = min(abs(vi) * courant, 1.0)
-            w = walls[:, :, i]
-            if vi > GROUND_SPEED_MPS:
-                w[..., 1:] += ai * (w[..., :-1] - w[..., 1:])
-                w[..., :1] -= ai * w[..., :1]
-            elif vi < -GROUND_SPEED_MPS:
-                w[..., :-1] += ai * (w[..., 1:] - w[..., :-1])
-                w[..., -1:] -= ai * w[..., -1:]
-    d, berm = walls[0], walls[1]
-    step = vy_cell * dt_s
-    left = np.maximum(step, 0.0)  # outward motion of the left wall
-    d[0] += step
-    d[1] -= step
-    np.maximum(d, 0.0, out=d)
-    berm[0] += sinkage_m * left
-    left -= step  # outward motion of the right wall
-    left *= sinkage_m
-    berm[1] += left
+    for i in range(nt):
+        v = ground_speed_mps[i]
+        a = min(abs(v) * courant, 1.0)
+        for q in range(2):
+            for s in range(2):
+                w = walls[q, s, i]
+                if v > GROUND_SPEED_MPS:  # from the front: sweep from the rear
+                    for c in range(nc - 1, 0, -1):
+                        w[c] += a * (w[c - 1] - w[c])
+                    w[0] -= a * w[0]
+                elif v < -GROUND_SPEED_MPS:
+                    for c in range(nc - 1):
+                        w[c] += a * (w[c + 1] - w[c])
+                    w[nc - 1] -= a * w[nc - 1]
+        for c in range(nc):
+            step = vy_cell[i, c] * dt_s
+            left = max(step, 0.0)  # outward motion of the left wall
+            walls[0, 0, i, c] = max(walls[0, 0, i, c] + step, 0.0)
+            walls[0, 1, i, c] = max(walls[0, 1, i, c] - step, 0.0)
+            walls[1, 0, i, c] += sinkage_m[i, c] * left
+            walls[1, 1, i, c] += (left - step) * sinkage_m[i, c]  # the right wall's
 
 
+@njit(cache=True)
 def wall_force_n_per_m(walls: np.ndarray, sinkage_m: np.ndarray, unit_weight_n_m3: float,
-                       cohesion_pa, friction_angle_rad, max_height_m: float,
-                       min_mobilisation_m: float = 5e-4, n_phi=None) -> np.ndarray:
+                       cohesion_pa: np.ndarray, friction_angle_rad: np.ndarray,
+                       max_height_m: float, min_mobilisation_m: float = 5e-4) -> np.ndarray:
     """Lateral side-wall force per unit track length on the track [N/m], (n_tracks, n_cells).
 
     On each side, passive pressure (`passive_pressure_n_per_m`) on a wall of height h = z +
     berm height (`berm_height_m`, capped at ``max_height_m``: soil spills over the track),
     mobilised as 1 - e^{-d/d_b} with d_b = max(h/10, ``min_mobilisation_m``); the left soil
     (side 0) pushes the track to -y, the right soil (side 1) to +y. ``walls`` as in
-    :func:`advance_wall`.
+    :func:`advance_wall`; the soil (``cohesion_pa``, ``friction_angle_rad``) per track.
     """
-    h = berm_height_m(walls[1], friction_angle_rad)
-    h += sinkage_m
-    np.minimum(h, max_height_m, out=h)
-    pres = passive_pressure_n_per_m(h, unit_weight_n_m3, cohesion_pa, friction_angle_rad, n_phi)
-    h *= 0.1
-    np.maximum(h, min_mobilisation_m, out=h)  # the mobilisation length d_b
-    np.divide(walls[0], h, out=h)
-    np.negative(h, out=h)
-    np.expm1(h, out=h)
-    h *= pres  # -P (1 - e^{-d/d_b}) on each side
-    return h[0] - h[1]
+    nt, nc = sinkage_m.shape
+    force = np.empty((nt, nc))
+    for i in range(nt):
+        phi = friction_angle_rad[i]
+        n_phi = passive_coefficient(phi)
+        for c in range(nc):
+            args = (sinkage_m[i, c], phi, max_height_m, unit_weight_n_m3, cohesion_pa[i], n_phi,
+                    min_mobilisation_m)
+            force[i, c] = (_side_force(walls[0, 0, i, c], walls[1, 0, i, c], *args)
+                           - _side_force(walls[0, 1, i, c], walls[1, 1, i, c], *args))
+    return force
+
+
+@njit(cache=True)
+def _side_force(penetration_m: float, berm_m2: float, sinkage_m: float, phi: float,
+                max_height_m: float, unit_weight_n_m3: float, cohesion_pa: float, n_phi: float,
+                min_mobilisation_m: float) -> float:
+    """-P (1 - e^{-d/d_b}) of one side wall [N/m] (:func:`wall_force_n_per_m`)."""
+    h = min(berm_height_m(berm_m2, phi) + sinkage_m, max_height_m)
+    pres = passive_pressure_n_per_m(h, unit_weight_n_m3, cohesion_pa, n_phi)
+    d_b = max(h * 0.1, min_mobilisation_m)  # the mobilisation length
+    return math.expm1(-(penetration_m / d_b)) * pres
+
+
+# -- one substep -----------------------------------------------------------------------------
+@njit(cache=True)
+def track_substep(load_n: np.ndarray, belt_speed_mps: np.ndarray, track_speed_mps: np.ndarray,
+                  lateral_speed_mps: np.ndarray, yaw_rate_rad_s: float,
+                  slip_sinkage: np.ndarray, deformable: np.ndarray, spread: np.ndarray,
+                  reduce: np.ndarray, x_cell_m: np.ndarray, soil: np.ndarray,
+                  settings: np.ndarray, j: np.ndarray, e: np.ndarray,
+                  walls: np.ndarray, out: np.ndarray, sinkage_m: np.ndarray, sums: np.ndarray,
+                  compaction_n: np.ndarray) -> None:
+    """The functions above composed for one substep of the tracks of a vehicle (in place).
+
+    Inputs: the road-wheel loads ``load_n`` [N]; per track the belt speed u_i, the ground speed
+    V_x,i of its centre line and its lateral speed V_y,i [m/s] (:func:`sliding_velocity`), its
+    slip-sinkage factor (:func:`slip_sinkage_factor`) and 1 on deformable soil, 0 on rigid;
+    the yaw rate [rad/s]. Constant over the substep: ``spread`` (n_tracks n_cells, n_wheels)
+    the road-wheel loads' shares of each cell (:func:`load_spread_matrix` per track),
+    ``reduce`` (n_sums, n_tracks n_cells) the weighted sums wanted of the cell outputs,
+    ``x_cell_m`` (n_tracks, n_cells) the cell centres, ``soil`` (`SOIL_ROWS` rows, one column
+    per track) and ``settings`` (`SETTING_NAMES`).
+
+    Steps: cell pressures from the loads (``spread``, per unit cell area); Bekker's
+    sinkage times the slip-sinkage factor; the shear field and direction state
+    (:func:`advance_shear`); the cell shear forces (:func:`cell_forces`) and the soil dampers on
+    the change of the cells' displacement (:func:`soil_damper_forces`); the side walls
+    (:func:`advance_wall`, :func:`wall_force_n_per_m`); the compaction resistance of each
+    track's deepest cell (`bekker.compaction_resistance_n`).
+
+    Outputs: ``out`` (6, n_tracks, n_cells): per cell the total force x, y on the track, the
+    shear force x, y, the side-wall force and the damper force's magnitude [N];
+    ``sinkage_m`` (n_tracks, n_cells); ``sums`` (n_sums, 6) = ``reduce`` applied to each of
+    the six outputs; ``compaction_n`` per track [N].
+    """
+    nt, nc = sinkage_m.shape
+    width, kc, kphi, n_exp = soil[S_WIDTH], soil[S_KC], soil[S_KPHI], soil[S_N]
+    dx, dt = settings[P_DX], settings[P_DT]
+    pressure = np.empty((nt, nc))
+    for i in range(nt):
+        for c in range(nc):
+            row = i * nc + c
+            q = 0.0
+            for k in range(load_n.size):
+                if spread[row, k] != 0.0:  # each cell takes the loads of two road wheels
+                    q += spread[row, k] * load_n[k]
+            pressure[i, c] = q * soil[S_INV_AREA, i]
+            z = _pressure_sinkage(pressure[i, c], width[i], kc[i], kphi[i], n_exp[i])
+            sinkage_m[i, c] = z * slip_sinkage[i] * deformable[i]
+    j_old = j[:, :, :-1] + j[:, :, 1:]  # twice the cells' displacement before the step
+    v_cell = sliding_velocity(track_speed_mps, belt_speed_mps, lateral_speed_mps,
+                              yaw_rate_rad_s, x_cell_m)
+    advance_shear(j, e, v_cell, belt_speed_mps, yaw_rate_rad_s, dx, dt, settings[P_E_MAX])
+    f_shear, stiffness = cell_forces(j, e, pressure, width, dx, soil[S_C], soil[S_TAN_PHI],
+                                     soil[S_K], out[2:4])
+    dj = j[:, :, :-1] + j[:, :, 1:]
+    dj -= j_old
+    dj *= 0.5
+    f_damp = soil_damper_forces(dj, f_shear, stiffness, settings[P_E_MAX], settings[P_ZETA],
+                                settings[P_CELL_MASS], dt)
+    advance_wall(walls, v_cell[1], track_speed_mps, sinkage_m, dx, dt)
+    f_wall = wall_force_n_per_m(walls, sinkage_m, settings[P_GAMMA], soil[S_C], soil[S_PHI],
+                                settings[P_MAX_WALL])
+    for i in range(nt):
+        for c in range(nc):
+            out[0, i, c] = f_shear[0, i, c] + f_damp[0, i, c]
+            out[1, i, c] = f_shear[1, i, c] + f_damp[1, i, c] + f_wall[i, c] * dx
+            out[4, i, c] = f_wall[i, c] * dx
+            out[5, i, c] = math.hypot(f_damp[0, i, c], f_damp[1, i, c])
+        deepest = sinkage_m[i].max()
+        compaction_n[i] = _compaction(deepest, width[i], kc[i], kphi[i], n_exp[i])
+    flat = out.reshape(6, nt * nc)
+    for r in range(sums.shape[0]):
+        for col in range(6):
+            sums[r, col] = 0.0
+        for m in range(nt * nc):
+            weight = reduce[r, m]
+            if weight != 0.0:  # each sum takes the cells of one road wheel or one track
+                for col in range(6):
+                    sums[r, col] += weight * flat[col, m]
+

@@ -2,7 +2,9 @@
 
 Registered by :mod:`slipenv.cli` with ``add_parser(sub)``; ``main(args)`` returns the exit code.
 DIR holds ``trials.csv`` and ``meta.json`` (format: `slipenv.testbed.csv_format`). Bad input
-raises `ValueError` naming the file, row and column (exit code 2, one line on stderr).
+raises `ValueError` naming the file, row and column (exit code 2, one line on stderr). A fit
+whose soil is not accepted still writes its report, then exits with status 1 and one line on
+stderr saying so and where ``rejected_soil`` was written, so a script cannot take it for a soil.
 
 The written soil loads with one line (present only when the fit is accepted; a rejected fit's
 soil is under ``rejected_soil``, with ``"accepted": false`` and the reasons in ``warnings``)::
@@ -16,6 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
+import sys
 from typing import Any
 
 __all__ = ["add_parser", "main"]
@@ -38,7 +41,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 
 
 def main(args: argparse.Namespace) -> int:
-    """Run ``slipenv fit-soil``; 0 on success (bad input raises ValueError: exit 2)."""
+    """Run ``slipenv fit-soil``; 0 when the soil is accepted, 1 when it is rejected (the
+    report is written either way; bad input raises ValueError: exit 2)."""
     from slipenv.cli_outputs import output_dir, output_file, partial_results
     from slipenv.terramechanics.presets import soil_by_name
     from slipenv.testbed.csv_format import read_testbed
@@ -60,7 +64,20 @@ def main(args: argparse.Namespace) -> int:
             (pathlib.Path(args.report_dir) / "report.md").write_text(_markdown(report))
         json_path.write_text(json.dumps(report, indent=2) + "\n")
     print(_markdown(report), end="")
+    if not report.get("accepted"):
+        print(f"fit-soil: soil rejected ({_first_reason(report)}); its fields are under "
+              f"'rejected_soil' in {json_path}", file=sys.stderr)
+        return 1
     return 0
+
+
+def _first_reason(report: dict) -> str:
+    """Why the soil was not accepted, from the report's first warning (one line)."""
+    prefix = "soil not accepted: "
+    for warning in report.get("warnings", []):
+        if warning.startswith(prefix):
+            return warning[len(prefix):].splitlines()[0]
+    return "the verdict rejects the law"
 
 
 def _markdown(report: dict) -> str:

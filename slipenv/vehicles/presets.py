@@ -54,24 +54,33 @@ def farm_2wd() -> VehicleSpec:
 
 
 def tracked_patako(road_wheels_per_side: int = 5, track_model: str = "per_wheel") -> VehicleSpec:
-    """Yamauchi's skid-steer tracked vehicle (Table 1): tread 0.41 m, tracks 0.60 × 0.11 m.
+    """Yamauchi's skid-steer tracked vehicle Patako (Table 1): tread 0.41 m, tracks 0.60 × 0.11 m.
+
+    Table 1, as published: dimensions L503 × W686 × H522 mm, tread 0.41 m, track length 0.60 m,
+    track width 0.11 m, Endo's n on a solid floor 0.824. The mass column is garbled in our copy
+    (it repeats the tread's "0.41 [m]"), and no other source we could find gives it: 30 kg in
+    all is assumed (26 kg hull, ten 0.4 kg road wheels). The 0.60 m tracks cannot fit a 503 mm
+    long body, so L and W read as swapped: 686 mm long (the tracks plus the hull's overhang),
+    503 mm wide (tread + track width = 0.52 m, the tracks' outer edges). The hull box here is
+    0.503 m long and 0.30 m wide between the tracks (its inertia only; the tracks carry it).
 
     Each track is ``road_wheels_per_side`` road wheels that share one sprocket speed (one drive
-    channel), each carrying an equal share of the track's ground contact length. Body
-    503 × 686 × 522 mm (Table 1). The mass in Table 1 is illegible in our copy: assumed.
+    channel), each carrying an equal share of the track's ground contact length.
 
-    Table 1's 0.60 m is the length of the track; it wraps around the sprocket and the idler, so
-    on firm ground it bears on the soil only between their axles, 0.60 m - 2r = 0.48 m
-    (Wong, Theory of Ground Vehicles, Ch. 4: the contact length of a track is the distance
-    between the centres of sprocket and idler). Sand would add the sinkage-deep arcs of the
-    sprocket and idler, about 2 sqrt(2 r z) = 2 cm for z = 1 mm, which is neglected. The contact
-    length sets the skid-steering resistance moment (mu W L/4, Wong Ch. 7): with 0.60 m the
-    simulated vehicle could not turn uphill on the 15° slope at all.
+    Contact length, derived (not published): Table 1's 0.60 m is the length of the track; it
+    wraps around the sprocket and the idler, so on firm ground it bears on the soil only between
+    their axles (Wong, Theory of Ground Vehicles, Ch. 4: the contact length of a track is the
+    distance between the centres of sprocket and idler), 0.60 m - 2r = 0.48 m with the
+    sprocket/idler radius r = 6 cm (not published: assumed). Sand adds
+    the sinkage-deep arcs of the sprocket and idler, about 2 sqrt(2 r z) = 4 cm at the 3 mm
+    static sinkage of ``toyoura_sand``, which is neglected. Grousers: not published (Fig. 3's
+    photograph is not in our copy); none are modelled, their effect on the shear is in the
+    soil's K.
 
     ``track_model`` selects the soil model: ``"per_wheel"`` (default: each road wheel its own
     Janosi patch) or ``"wong_chiang"`` (one shear field along each track, sinkage, rut and
     side-wall resistance; ``slipenv.sim.track_soil``), registered as the vehicle
-    ``tracked_patako_wong_chiang``.
+    ``tracked_patako_wong_chiang``, the one ``slipenv/TrackedSlopeCircle-v0`` drives.
     """
     tread, track_length, width = 0.41, 0.60, 0.11
     r = 0.06  # assumed road-wheel / sprocket / idler radius
@@ -87,7 +96,7 @@ def tracked_patako(road_wheels_per_side: int = 5, track_model: str = "per_wheel"
     return VehicleSpec(
         name="tracked_patako",
         kind="skid_steer",
-        chassis_mass_kg=26.0,  # assumed (Table 1 mass unreadable)
+        chassis_mass_kg=26.0,  # assumed (Table 1's mass is garbled in our copy)
         chassis_size_m=(0.503, 0.30, 0.30),
         chassis_center_height_m=0.17,
         wheels=wheels,
@@ -102,7 +111,8 @@ def tracked_patako(road_wheels_per_side: int = 5, track_model: str = "per_wheel"
         track_length_m=length,
         track_model=track_model,
         assumed=("chassis_mass_kg", "road wheel radius", "road_wheels_per_side",
-                 "track_length_m (contact between sprocket and idler axles)"),
+                 "track_length_m (derived: 0.60 m track less the assumed sprocket radius)",
+                 "grousers (none modelled)"),
     )
 
 

@@ -95,3 +95,23 @@ def test_format_shows_the_breakdown_table(husky_result):
     assert "vs coulomb" in text and "us per control step" in text
     breakdown = text.split("us per control step", 1)[1].splitlines()
     assert any(line.startswith(ENV) for line in breakdown)
+
+
+def test_a_tracked_env_reports_the_track_models_cost_against_the_per_wheel_law():
+    """The same env with the track model switched: both timed, interleaved, and the ratio
+    printed as "track model / per-wheel"."""
+    tracked = "slipenv/TrackedSlopeCircle-v0"
+    cost = bench.track_model_cost(tracked, steps=5, repeats=2)
+    assert cost["per_wheel_us_per_step"] > 0.0 and cost["track_model_us_per_step"] > 0.0
+    assert cost["ratio"] > 0.0
+    result = {"envs": {tracked: {"env_steps_per_s": 1.0, "substeps_per_step": 12,
+                                 "bare_substeps_per_s": 1.0, "ratio": 1.0,
+                                 "realtime_factor": 1.0, "track_model_vs_per_wheel": cost}}}
+    line = next(ln for ln in bench.format_bench(result).splitlines()
+                if ln.startswith("track model / per-wheel"))
+    assert tracked in line and f"{cost['ratio']:.2f}" in line
+
+
+def test_untracked_envs_have_no_track_model_figure(husky_result):
+    assert "track_model_vs_per_wheel" not in husky_result["envs"][ENV]
+    assert "track model / per-wheel" not in bench.format_bench(husky_result)

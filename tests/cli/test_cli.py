@@ -33,7 +33,7 @@ def test_bench_writes_the_documented_json_schema(tmp_path):
         assert entry[key] > 0
     start = doc["startup"]  # measured in a fresh interpreter: import, then the first step
     assert 0 < start["import_s"] < start["first_make_s"]["slipenv/HuskySand-v0"] + 5
-    assert set(start["compiled"]) == {"wheel_loop", "lindgren_ekf"}
+    assert set(start["compiled"]) == {"wheel_loop", "lindgren_ekf", "track_model"}
     expected = entry["env_steps_per_s"] * entry["substeps_per_step"] / entry["bare_substeps_per_s"]
     assert entry["ratio"] == round(expected, 3) or abs(entry["ratio"] - expected) < 2e-3
 

@@ -30,7 +30,9 @@ def test_writes_json_matching_the_schema_and_a_report(synth_log_dir, tmp_path, c
         assert len(pair) == 2 and all(isinstance(v, float) for v in pair) and pair[1] > 0
     g = rep["gain"]
     assert set(g) == {"metric", "before", "after", "relative", "evaluated_on"}
-    assert g["metric"] == "position_rmse_m" and g["evaluated_on"] == "held-out"
+    # the model was chosen by its transfer: the gain is that of one half of the log replayed
+    # whole by the model fitted on the other half
+    assert g["metric"] == "position_rmse_m" and g["evaluated_on"].startswith("held-out half")
     assert g["after"] < g["before"] and g["relative"] == pytest.approx(1 - g["after"] / g["before"])
     assert rep["candidates"][0]["cause"] == "rolling_radius"
     assert all({"cause", "score", "gain_relative"} <= set(c) for c in rep["candidates"])

@@ -3,9 +3,11 @@
 The rover's drive torque on level rigid ground is its wheels fighting one another over the
 steering geometry, which a softer longitudinal law takes away (s = T/k_s of 0.2-0.4 % was
 left in such logs, below what a log resolves, and the diagnosis rightly said ``none``), so
-the rover stands on a slope whose grade torque survives. On a skid-steer vehicle a softer
-longitudinal law is the world ``turning_slip`` hides, and the log names it so: the report
-gives ``torque_slip`` as the confounded alternative.
+the rover stands on a slope whose grade torque survives. On a skid-steer vehicle on level
+ground a softer longitudinal law is the world ``turning_slip`` hides (the drive torque is the
+turning resistance), and the log names it so: the report gives ``torque_slip`` as the
+confounded alternative. The skid-steer vehicles therefore stand on a slope too, whose grade
+torque the turn does not set.
 """
 
 from __future__ import annotations
@@ -38,6 +40,17 @@ def test_rover_torque_slip_is_sized_for_the_grade_torque():
              * spec.wheel_radius_nominal_m / len(spec.channels))
     slip = grade / model["torque_slip"]["k_s_front_left_nm"]
     assert 0.02 <= slip <= 0.06
+
+
+def test_skid_steer_torque_slip_stands_on_a_slope_whose_grade_torque_the_turn_does_not_set():
+    for kind in ("skid_steer", "tracked"):
+        hiding = effect("torque_slip").hiding
+        assert hiding is not None
+        low, high = hiding.slope_range(synth.PHYSICAL_KIND[kind]) or (0.0, 0.0)
+        assert (low, high) == (6.0, 12.0), kind
+    # turning slip, the same softer law with no torque column, stays on level ground
+    turning = effect("turning_slip").hiding
+    assert turning is not None and turning.slope_range("skid_steer") is None
 
 
 def _selection(cause: str, torque_slip_significant: bool) -> Selection:

@@ -44,7 +44,8 @@ def default_run():
 def test_observation_is_the_slip_aware_ekf_estimate(default_run) -> None:
     env, observations, infos = default_run
     ekf = env.unwrapped.estimator
-    assert isinstance(ekf, LindgrenEKF) and ekf.scheme == Scheme.ALL_SLIP and ekf.n == 13
+    assert isinstance(ekf, LindgrenEKF) and ekf.scheme == Scheme.ALL_SLIP and ekf.n == 14
+    assert ekf.lateral_slip  # the castors make it crab: FarmField's filter estimates it
     obs, info = observations[-1], infos[-1]
     est, true = info["estimated_pose"], info["true_pose"]
     np.testing.assert_allclose(obs[:2], est[:2], atol=1e-4)  # float32 observation

@@ -6,9 +6,10 @@ checks: a filter fed this data should pass its χ² tests) or by a speed and yaw
 such as Lindgren's straight lines with alternating 180° turns. Sensors are the filter's observation
 models plus white Gaussian noise of the filter's variances: accelerometers and gyro (Eq. 14),
 inclinometer, odometer counts by the slip-aware Eq. 37 with the true R_w and k_s in the state
-(Eq. 15 when the torque is zero), and bearings from a :class:`BeaconScanner`. No PyBullet: this
-tests the estimator against its own assumptions; the PyBullet environments test it against
-physics. It lives with the tests because it drives the sensor class
+(Eq. 15 when the torque is zero; Okello's curve when the state carries its 1/B; the lateral
+slip of the process model when it carries k_β), and bearings from a :class:`BeaconScanner`. No
+PyBullet: this tests the estimator against its own assumptions; the PyBullet environments test
+it against physics. It lives with the tests because it drives the sensor class
 (:class:`slipenv.sensors.beacons.BeaconScanner`), which the estimators may not import.
 """
 
@@ -36,8 +37,9 @@ class SynthRun:
     ----------
     t_s : np.ndarray, shape (K + 1,)
         Frame times [s].
-    truth : np.ndarray, shape (K + 1, 13)
-        True state at each frame (layout of :mod:`slipenv.estimators.lindgren.models`; θ unwrapped).
+    truth : np.ndarray, shape (K + 1, n)
+        True state at each frame, n = 13, 14, 15 or 16 (layout of
+        :mod:`slipenv.estimators.lindgren.models`; θ unwrapped).
     frames : list[SensorFrame]
         K + 1 frames; ``frames[0]`` is for ``reset``.
     """
@@ -109,8 +111,9 @@ def simulate(
     ----------
     geometry : OdometryGeometry
         Track width, encoder resolution and wheel grouping (one wheel per side is enough).
-    x0 : np.ndarray, shape (13,)
-        Initial true state including the true R_w and k_s (held constant).
+    x0 : np.ndarray, shape (13,), (15,) or one more with k_β
+        Initial true state including the true R_w, k_s, and Okello's 1/B and the lateral slip
+        gain k_β when it has them (held constant).
     n_steps : int
         Number of frames after the first.
     dt_s : float
@@ -131,8 +134,8 @@ def simulate(
     process_noise : bool
         Add white jerk and tilt noise with the filter's ``Q``.
     soil_drift : bool
-        Let R_w and k_s random-walk with distance as the filter's ``Q`` assumes (Lindgren §4);
-        otherwise they stay at their ``x0`` values.
+        Let R_w and k_s (1/B, k_β) random-walk with distance as the filter's ``Q`` assumes
+        (Lindgren §4); otherwise they stay at their ``x0`` values.
 
     Returns
     -------
@@ -143,8 +146,9 @@ def simulate(
     n_wheels = max(g.left + g.right) + 1
     torque_fn = torque if torque is not None else (lambda t, x: np.zeros(2))
     x = np.array(x0, dtype=float)
-    if x.shape != (lm.N_SLIP,):
-        raise ValueError(f"x0 must have shape ({lm.N_SLIP},)")
+    if lm.soil_size(len(x)) not in (lm.N_SLIP, lm.N_OKELLO):
+        raise ValueError(f"x0 must be a slip-model state (13 or 15 entries, plus k_β), got "
+                         f"{x.shape}")
     sd = {"odo": math.sqrt(p.odometer_var_rad2) * g.counts_per_rad,
           "ax": math.sqrt(p.acc_x_var_g2) * lm.G_MPS2, "ay": math.sqrt(p.acc_y_var_g2) * lm.G_MPS2,
           "gyro": math.sqrt(p.gyro_var_rad2ps2), "tilt": math.sqrt(p.tilt_var_rad2)}
@@ -178,10 +182,13 @@ def simulate(
             v_ref, om_ref = reference(t - dt_s)
             x[lm.IVD] = (v_ref - x[lm.IV]) / response_time_s
             x[lm.IOMD] = (om_ref - x[lm.IOM]) / response_time_s
-        n = lm.N_SLIP if soil_drift else lm.N_BASE
-        Q = lm.process_Q(x[:n], dt_s, p.jerk_psd_v, p.jerk_psd_omega, p.tilt_psd,
-                         p.radius_var_per_m, p.k_s_rel_var_per_m)
-        x[:n] = lm.process_fx(x[:n], dt_s) + (_sample(rng, Q) if process_noise else 0.0)
+        xs = x if soil_drift else x[:lm.N_BASE]
+        Q = lm.process_Q(xs, dt_s, p.jerk_psd_v, p.jerk_psd_omega, p.tilt_psd,
+                         p.radius_var_per_m, p.k_s_rel_var_per_m, p.inv_shape_var_per_m,
+                         p.lateral_slip_var_per_m)
+        x = lm.process_fx(x, dt_s)
+        if process_noise:
+            x[:len(xs)] += _sample(rng, Q)
         T_new = np.asarray(torque_fn(t, x), dtype=float)
         dc = lo.odo_slip_hx(x, dt_s, 0.5 * (T + T_new), g.track_width_m, g.counts_per_rad,
                              lo.NO_SOIL)

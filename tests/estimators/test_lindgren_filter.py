@@ -57,10 +57,17 @@ def test_schemes_by_number_and_name() -> None:
     assert parse_scheme("2") is Scheme.ODOMETRY_ONLY
     with pytest.raises(ValueError, match="unknown scheme"):
         parse_scheme("all")
+    assert parse_scheme(5) is parse_scheme("all_slip_okello") is Scheme.ALL_SLIP_OKELLO
     with pytest.raises(ValueError, match="unknown scheme"):
-        parse_scheme(5)
+        parse_scheme(6)
     assert LindgrenEKF(GEOM, "all_slip").n == 13
+    assert LindgrenEKF(GEOM, 5).n == 15
     assert LindgrenEKF(GEOM, 3).n == 9
+    lateral = LindgrenNoise(lateral_slip_sigma0=3.0)
+    assert [LindgrenEKF(GEOM, s, lateral).n for s in (3, 4, 5)] == [10, 14, 16]
+    assert LindgrenEKF(GEOM, 4, lateral).state_names[-1] == "k_beta"
+    with pytest.raises(ValueError, match="lateral_slip_sigma0"):
+        LindgrenNoise(lateral_slip_sigma0=-1.0)
     assert LindgrenEKF(GEOM, 4, oracle=OracleSoil((0.28, 0.28), (2e3, 2e3))).n == 9
     with pytest.raises(ValueError, match="oracle"):
         LindgrenEKF(GEOM, 3, oracle=OracleSoil((0.28, 0.28), (2e3, 2e3)))

@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 from filterpy.kalman import KalmanFilter
+from scipy import stats
 
 from slipenv.contracts.frame import SensorFrame
 from slipenv.estimators.base import OdometryGeometry
@@ -129,3 +130,47 @@ def test_bearing_update_reduces_the_trace_of_P_by_the_kalman_amount() -> None:
     eig = np.linalg.eigvalsh(pred.P - upd.P)
     assert eig.min() > -1e-12 * eig.max()
     assert np.sum(eig > 1e-9 * eig.max()) == 1
+
+
+def test_mills_ratio_is_the_normal_pdf_over_its_tail() -> None:
+    for alpha in (0.0, 1.0, 4.9, 5.1, 12.0, 35.0):
+        expected = stats.norm.pdf(alpha) / stats.norm.sf(alpha)
+        assert kernel.mills_lambda(alpha) == pytest.approx(expected, rel=1e-10)
+
+
+@pytest.mark.parametrize("b", [-0.5, -20.0])
+def test_clamp_moves_b_to_zero_and_keeps_its_mean_square_error(b: float) -> None:
+    """Imposing b >= 0 on N(x, P) with b < 0: b goes to 0, every other state to its
+    conditional mean given b = 0 (filterpy's update with a noise-free measurement of b), and
+    P_bb to the mean square of the truncated density about 0 (scipy's truncnorm); the rest
+    of P shrinks along the regression on b; b >= 0 leaves everything as it is."""
+    rng = np.random.default_rng(3)
+    n = lm.N_OKELLO
+    x, P = rng.normal(size=n), random_spd(rng, n)
+    x[lm.ITH] = 0.1
+    x[lm.IRL:lm.IKR + 1] = (0.28, 0.29, 2000.0, 2100.0)
+    x[lm.IBL], x[lm.IBR] = b, 2.0  # left violates b >= 0, right does not
+    P0 = P.copy()
+    kf = KalmanFilter(dim_x=n, dim_z=1)
+    kf.x, kf.P = x.copy(), P.copy()
+    H = np.zeros((1, n))
+    H[0, lm.IBL] = 1.0
+    kf.update(np.zeros(1), R=np.array([[1e-14]]), H=H)
+    kernel.clamp_nonnegative(x, P, lm.IBL)
+    assert x[lm.IBL] == 0.0
+    expected_x = kf.x.copy()
+    expected_x[lm.ITH] = lm.wrap(expected_x[lm.ITH])  # the clamp wraps θ as the updates do
+    np.testing.assert_allclose(x, expected_x, rtol=1e-9, atol=1e-9)
+    sd = math.sqrt(P0[lm.IBL, lm.IBL])
+    m2 = stats.truncnorm(-b / sd, math.inf, loc=b, scale=sd).moment(2)
+    assert P[lm.IBL, lm.IBL] == pytest.approx(m2, rel=1e-8)
+    col = P0[:, lm.IBL]
+    expected = P0 - np.outer(col, col) * (1.0 - m2 / sd**2) / sd**2
+    np.testing.assert_allclose(P, expected, rtol=1e-9, atol=1e-12)
+    np.testing.assert_array_equal(P, P.T)
+    assert np.all(np.linalg.eigvalsh(P) > 0.0)
+    x2, P2 = x.copy(), P.copy()
+    x2[lm.IBL] = 0.0
+    kernel.constrain_shape(x2, P2)  # b >= 0 everywhere: nothing changes
+    np.testing.assert_array_equal(x2, x)
+    np.testing.assert_array_equal(P2, P)

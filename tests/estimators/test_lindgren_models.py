@@ -19,12 +19,18 @@ TAU = 0.05  # [s]
 
 
 def state(seed: int = 0, n: int = lm.N_SLIP, v: float = 1.2) -> np.ndarray:
-    """A generic state with every entry non-zero."""
+    """A generic state of any layout (9, 13 or 15 entries, plus k_β) with every entry
+    non-zero."""
     rng = np.random.default_rng(seed)
     x = np.array([3.0, -2.0, 0.7, v, 0.3, 0.4, -0.2, 0.05, -0.03,
-                  0.283, 0.287, 2500.0, 2200.0])[:n]
+                  0.283, 0.287, 2500.0, 2200.0, 7.0, 9.0])[:lm.soil_size(n)]
     x[:9] += rng.normal(0.0, 0.05, 9)
+    if lm.lateral_index(n) >= 0:
+        x = np.append(x, 2.5)  # k_β [rad/g]
     return x
+
+
+LAYOUTS = [lm.N_BASE, lm.N_BASE + 1, lm.N_SLIP, lm.N_SLIP + 1, lm.N_OKELLO, lm.N_OKELLO + 1]
 
 
 def fd_jacobian(fun, x: np.ndarray) -> np.ndarray:
@@ -46,7 +52,7 @@ def assert_jacobian(H: np.ndarray, fun, x: np.ndarray) -> None:
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-@pytest.mark.parametrize("n", [lm.N_BASE, lm.N_SLIP])
+@pytest.mark.parametrize("n", LAYOUTS)
 def test_process_jacobian(seed: int, n: int) -> None:
     x = state(seed, n)
     for tau in (TAU, 0.013, 0.4):
@@ -227,3 +233,138 @@ def test_oracle_soil_validation() -> None:
         OracleSoil((0.283, 0.287), (2500.0, -1.0))
     with pytest.raises(ValueError, match="wheel_radius_m"):
         OracleSoil((0.283,), (2500.0, 2200.0))
+
+
+# ---------------------------------------------------------------------------------------------
+# Lateral slip gain (any layout) and Okello's curve (scheme 5)
+# ---------------------------------------------------------------------------------------------
+def test_state_layouts_are_named_and_decoded() -> None:
+    assert [len(lm.state_names(n)) for n in LAYOUTS] == LAYOUTS
+    assert lm.state_names(lm.N_SLIP + 1)[-1] == "k_beta"
+    assert lm.state_names(lm.N_OKELLO)[lm.IBL:] == ("b_l", "b_r")
+    assert [lm.lateral_index(n) for n in LAYOUTS] == [-1, 9, -1, 13, -1, 15]
+    with pytest.raises(ValueError, match="11 entries"):
+        lm.state_names(11)
+
+
+@pytest.mark.parametrize("n", [lm.N_BASE + 1, lm.N_SLIP + 1, lm.N_OKELLO + 1])
+def test_lateral_slip_leans_the_velocity_by_the_slip_angle(n: int) -> None:
+    """On a steady turn the position moves at β = atan(k_β a_y) off the heading, with
+    a_y = v Ω / g - α2 the lateral specific force (Eq. 14), and at the forward speed v / cos β
+    (v is the body-x speed the odometers see); k_β = 0 is the paper's model exactly."""
+    x = state(0, n)
+    x[[lm.IVD, lm.IOMD]] = 0.0
+    tau = 1e-4  # short enough that the heading does not turn
+    step = lm.process_fx(x, tau)[:2] - x[:2]
+    a_y = x[lm.IV] * x[lm.IOM] / lm.G_MPS2 - x[lm.IA2]
+    beta = math.atan(x[-1] * a_y)
+    direction = math.atan2(step[1], step[0]) - (x[lm.ITH] + 0.5 * tau * x[lm.IOM])
+    assert direction == pytest.approx(beta, rel=1e-9)
+    assert math.hypot(*step) == pytest.approx(tau * x[lm.IV] / math.cos(beta), rel=1e-9)
+    x[-1] = 0.0
+    np.testing.assert_array_equal(lm.process_fx(x, 0.3)[:-1], lm.process_fx(x[:-1], 0.3))
+
+
+def test_lateral_slip_gain_grows_with_distance_only() -> None:
+    x = state(0, lm.N_SLIP + 1)
+    Q = lm.process_Q(x, TAU, 0.5, 0.5, 1e-4, 1e-6, 1e-4, 1e-2, 1e-3)
+    d = abs(x[lm.IV] + 0.5 * TAU * x[lm.IVD]) * TAU
+    assert Q[-1, -1] == pytest.approx(1e-3 * d, rel=1e-12)
+    assert not Q[-1, :-1].any()
+    x[[lm.IV, lm.IVD]] = 0.0
+    assert lm.process_Q(x, TAU, 0.5, 0.5, 1e-4, 1e-6, 1e-4, 1e-2, 1e-3)[-1, -1] == 0.0
+
+
+def test_okello_curve_is_the_papers_and_terramechanics_one() -> None:
+    """g(x) = 1 - (1 - e^{-x}) / x (Lindgren Eq. 18), the simulation's Okello curve with
+    A = B = 1, through its series below 0.1 and its closed form above; g' against finite
+    differences on both sides of the switch."""
+    from slipenv.terramechanics.janosi import okello_traction
+
+    xs = np.concatenate([np.linspace(1e-6, 0.2, 41), np.linspace(0.2, 40.0, 60)])
+    g = np.array([lo.okello_g(v) for v in xs])
+    np.testing.assert_allclose(g, okello_traction(xs, 1.0, 1.0), rtol=1e-9)
+    for v in (-3.0, -0.1 - 1e-9, -0.05, 1e-4, 0.0999999, 0.1000001, 2.0, 15.0):
+        h = 1e-6
+        fd = (lo.okello_g(v + h) - lo.okello_g(v - h)) / (2 * h)
+        assert lo.okello_dg(v) == pytest.approx(fd, rel=1e-7)
+    assert lo.okello_g(0.0) == 0.0 and lo.okello_dg(0.0) == 0.5  # Lindgren Eq. 23
+
+
+@pytest.mark.parametrize("u", [-4.0, -0.3, -1e-3 - 1e-12, -2e-4, 0.0, 3e-4, 1e-3 + 1e-12, 0.2,
+                               0.5, 0.8, 0.99])
+def test_okello_inverse_and_slip_factor(u: float) -> None:
+    """g(g⁻¹(u)) = u to rounding; φ = g⁻¹(u) / (2u) with φ(0) = 1 (the linear law) and φ'
+    against finite differences, across the series/Newton switch at |u| = 1e-3."""
+    x = lo.okello_inverse(u)
+    assert lo.okello_g(x) == pytest.approx(u, abs=1e-14)
+    phi, dphi = lo.okello_slip_factor(u)
+    assert phi == pytest.approx(x / (2 * u) if u else 1.0, rel=1e-10)
+    h = 1e-7
+    fd = (lo.okello_slip_factor(u + h)[0] - lo.okello_slip_factor(u - h)[0]) / (2 * h)
+    assert dphi == pytest.approx(fd, rel=1e-5)
+
+
+def okello_state(b: float, n: int = lm.N_OKELLO) -> np.ndarray:
+    x = state(0, n)
+    x[lm.IBL:lm.IBR + 1] = b
+    return x
+
+
+@pytest.mark.parametrize("torque", [(420.0, 150.0), (-300.0, 60.0)])
+@pytest.mark.parametrize("v", [1.2, -0.8])
+def test_okello_slip_is_the_inverse_of_the_curve(torque: tuple[float, float], v: float) -> None:
+    """The slip the 15-state model assigns to a torque puts that torque on Okello's curve,
+    T = T_max g(s / B) with B = 1/b and T_max = 2 B k_s (Lindgren Eq. 20, 24), odd in s."""
+    from slipenv.terramechanics.janosi import okello_traction
+
+    x = okello_state(b=7.0)
+    T = np.array(torque)
+    s = lo.wheel_slip(x, TAU, T, W, lo.NO_SOIL)
+    sigma = np.sign(lo.wheel_speeds(x, TAU, W))
+    B = 1.0 / x[lm.IBL:lm.IBR + 1]
+    t_max = 2.0 * B * x[lm.IKL:lm.IKR + 1]
+    np.testing.assert_allclose(okello_traction(s, t_max, B), sigma * T, rtol=1e-10)
+    linear = sigma * T / x[lm.IKL:lm.IKR + 1]
+    assert np.all(np.abs(s) > np.abs(linear))  # the curve bends: more slip than the line
+
+
+@pytest.mark.parametrize("b", [0.0, 1e-9])
+def test_okello_model_limit_is_the_linear_law(b: float) -> None:
+    """b = 1/B → 0 (T_max → ∞ at fixed k_s): counts and Jacobian are Eq. 37 and Eq. 38-41 of
+    the linear law, the closed form z = (τ / Γ) v_w k_s / (R_w (k_s - σ T))."""
+    x15 = okello_state(b)
+    x13 = x15[:lm.N_SLIP].copy()
+    T = np.array([300.0, -120.0])
+    z = lo.odo_slip_hx(x15, TAU, T, W, CPR, lo.NO_SOIL)
+    v_w = lo.wheel_speeds(x13, TAU, W)
+    sigma = np.sign(v_w)
+    k_s, r_w = x13[lm.IKL:lm.IKR + 1], x13[lm.IRL:lm.IRR + 1]
+    closed = TAU * CPR * v_w * k_s / (r_w * (k_s - sigma * T))
+    np.testing.assert_allclose(z, closed, rtol=1e-7)
+    H15 = lo.odo_slip_H(x15, TAU, T, W, CPR, lo.NO_SOIL)
+    H13 = lo.odo_slip_H(x13, TAU, T, W, CPR, lo.NO_SOIL)
+    np.testing.assert_allclose(H15[:, :lm.N_SLIP], H13, rtol=1e-7, atol=1e-12)
+
+
+@pytest.mark.parametrize("n", [lm.N_OKELLO, lm.N_OKELLO + 1, lm.N_SLIP + 1])
+@pytest.mark.parametrize("torque", [(420.0, 150.0), (-80.0, 40.0)])
+@pytest.mark.parametrize("v", [1.2, -0.8])
+def test_curved_and_lateral_odometry_jacobians(n: int, torque: tuple[float, float],
+                                               v: float) -> None:
+    x = state(0, n, v=v)
+    T = np.array(torque)
+    assert_jacobian(lo.odo_slip_H(x, TAU, T, W, CPR, lo.NO_SOIL),
+                    lambda s: lo.odo_slip_hx(s, TAU, T, W, CPR, lo.NO_SOIL), x)
+    assert_jacobian(lo.ins_H(x), lo.ins_hx, x)
+    beacon = np.array([14.0, 9.0])
+    assert_jacobian(lo.bearing_H(x, beacon), lambda s: lo.bearing_hx(s, beacon[None]), x)
+
+
+def test_okello_slip_past_the_curves_limit_is_infinite() -> None:
+    """A torque at or above T_max = 2 k_s / b has no slip on the curve: inf, which the filter
+    skips as out of range."""
+    x = okello_state(b=7.0)
+    t_max = 2.0 * x[lm.IKL] / 7.0
+    s = lo.wheel_slip(x, TAU, np.array([1.01 * t_max, 10.0]), W, lo.NO_SOIL)
+    assert s[0] == math.inf and 0.0 < s[1] < 0.01

@@ -7,8 +7,8 @@ from slipenv.experiments.lindgren.report import nis_distance, target_lines, targ
 
 
 def _metrics(nis4: float | None, band: list) -> dict:
-    return {"mean_deviation_m": {"scheme3": 0.3, "scheme4": 0.07},
-            "nis": {"scheme3": 12.0, "scheme4": nis4, "band": band},
+    return {"mean_deviation_m": {"no_slip_model": 0.3, "slip_model": 0.07},
+            "nis": {"no_slip_model": 12.0, "slip_model": nis4, "band": band},
             "dropout_final_error_m": {"no_slip_model": 12.0, "slip_model": 0.7, "oracle": 0.1}}
 
 
@@ -21,14 +21,16 @@ def test_nis_distance_is_zero_inside_the_band_and_none_without_a_nis():
 
 def test_a_filter_without_odometry_statistics_misses_its_nis_target_and_prints_n_a():
     tg = targets(_metrics(None, [None, None]))
-    row = tg["scheme4 NIS closer to band than scheme3"]
+    row = tg["slip_model NIS closer to band than no_slip_model"]
     assert row["value"] is None and row["met"] is False
-    assert tg["scheme4 deviation <= 0.7 scheme3"]["met"] is True
+    assert tg["slip_model NIS inside the 95 % band"]["met"] is False
+    assert tg["slip_model deviation <= 0.7 no_slip_model"]["met"] is True
     lines = target_lines(tg)
-    assert "[MISSED] scheme4 NIS closer to band than scheme3: n/a vs n/a" in lines
+    assert "[MISSED] slip_model NIS closer to band than no_slip_model: n/a vs n/a" in lines
     assert not any("nan" in line.lower() for line in lines)
 
 
 def test_with_statistics_the_nis_target_is_judged_on_the_band_distance():
     tg = targets(_metrics(2.0, [1.9, 2.1]))
-    assert tg["scheme4 NIS closer to band than scheme3"]["met"] is True
+    assert tg["slip_model NIS closer to band than no_slip_model"]["met"] is True
+    assert tg["slip_model NIS inside the 95 % band"]["met"] is True

@@ -12,13 +12,15 @@ from slipenv.terrain.terrain import TerrainSpec
 
 @pytest.fixture
 def make_sim():
-    """``make_sim(vehicle, soil, force_model, terrain=None)`` -> a Simulator, closed after."""
+    """``make_sim(vehicle, soil, force_model, terrain=None, force_options=None, **sim_kw)`` -> a
+    Simulator (the force model built from its name with ``force_options``), closed after."""
     sims = []
 
     def build(vehicle: str, soil: str, force_model: str, terrain: TerrainSpec | None = None,
-              **kw) -> Simulator:
+              force_options: dict | None = None, **kw) -> Simulator:
         spec = make_vehicle(vehicle)
-        sim = Simulator(spec, terrain or TerrainSpec(), make_force_model(force_model, spec),
+        sim = Simulator(spec, terrain or TerrainSpec(),
+                        make_force_model(force_model, spec, force_options),
                         make_soil_map(soil, None), **kw)
         sims.append(sim)
         return sim

@@ -111,10 +111,11 @@ def test_farm_castors_in_the_front_wheels_ruts_meet_only_the_compaction_below_th
     """multi_pass=True (Wong §2.4 repetitive loading; `bekker.rut_following_compaction_n`),
     castors on their own geometry: driving straight, each castor runs in the rut of the
     driven wheel ahead of it and meets f_r W_c + max(R_c(z_c) - R_c(z_rut), 0), R_c Bekker's
-    compaction for the castor's width, z_c its own sinkage, z_rut the front wheel's."""
+    compaction for the castor's width, z_c its own sinkage, z_rut the front wheel's. The
+    driven wheels' slip sinkage is off: this is the static ruts' law alone."""
     from slipenv.sim.wheel_soil import WheelSoilInjector
 
-    sim = make_sim("farm_2wd", "field_loam", "linear")
+    sim = make_sim("farm_2wd", "field_loam", "linear", force_options={"slip_sinkage": None})
     sim.reset(0.0, 0.0, 0.0)
     injector = WheelSoilInjector(sim.client, sim.spec, sim.body, sim.terrain.body_id,
                                  sim.force_model, sim.soil_map, sim.dt_s, multi_pass=True,

@@ -209,3 +209,63 @@ def test_the_track_injector_offers_what_the_simulator_reads(tracked):
     state = sim.injector.contact_state()
     assert state.load_n.sum() == pytest.approx(sim.spec.mass_kg * G, rel=0.02)
     assert len(sim.injector.links) == len(sim.spec.wheels)
+
+
+# -- reading PyBullet natively ------------------------------------------------------------------
+def _turn_on_slope(sim: Simulator) -> np.ndarray:
+    """1.5 s of turning across a 15° slope from rest; the truths (position, yaw, velocities)."""
+    sim.reset(0.0, 0.0, 0.0)
+    truths = drive(sim, 0.05, 0.3, 1.5)
+    return np.array([[*t.position_m, t.yaw_rad, *t.velocity_body_mps] for t in truths])
+
+
+def test_natively_the_injector_reads_and_applies_exactly_what_the_python_api_does(
+        tracked, monkeypatch):
+    """Bullet's C API and pybullet's Python API give the same readings bit for bit, checked
+    on the way, and the same forces applied make the same trajectory bit for bit."""
+    slope = TerrainSpec(kind="slope", slope_deg=15.0, downhill_azimuth_deg=-90.0)
+    native = tracked(slope)
+    if not native.injector.native_queries:
+        pytest.skip("native PyBullet access is unavailable on this pybullet")
+    run_native = _turn_on_slope(native)
+    inj = native.injector
+    assert not inj.native_mismatch and inj.native_verifications >= 2
+    a, b = np.zeros_like(inj._reading), np.zeros_like(inj._reading)
+    inj._io.read(a)
+    inj._read_python(b)
+    assert a.tobytes() == b.tobytes() and a[13:13 + inj.n].sum() > 0.0
+    monkeypatch.setenv("SLIPENV_PYBULLET_API", "1")
+    python = tracked(slope)
+    assert not python.injector.native_queries
+    assert _turn_on_slope(python).tobytes() == run_native.tobytes()
+
+
+def test_a_broken_guard_switches_to_the_python_api_and_warns(tracked):
+    from slipenv.sim.bullet_native import NativeReaderWarning
+
+    sim = tracked()
+    if not sim.injector.native_queries:
+        pytest.skip("native PyBullet access is unavailable on this pybullet")
+    sim.reset(0.0, 0.0, 0.0)
+    sim.injector._io.scribble_guard()
+    with pytest.warns(NativeReaderWarning, match="guard region"):
+        hold(sim, 0.1)
+    assert not sim.injector.native_queries and sim.injector.native_mismatch
+    assert sum(sim.injector.load) > 0.0  # it goes on, through the Python API
+
+
+def test_the_compiled_hull_frame_is_pybullets_quaternion_matrix():
+    from slipenv.pybullet_quiet import import_pybullet
+    from slipenv.sim.track_soil import _hull_kinematics
+
+    p = import_pybullet()
+    rng = np.random.default_rng(5)
+    rot, hull, tracks_now = np.zeros(9), np.zeros(3), np.zeros((5, 1))
+    for _ in range(200):
+        q = rng.normal(size=4)
+        q /= np.linalg.norm(q)
+        reading = np.concatenate((np.zeros(3), q, np.zeros(6), [1.0], [0.0], [0.0]))
+        _hull_kinematics(reading, np.zeros(1, dtype=np.int64), np.ones((4, 1)), rot, hull,
+                         tracks_now)
+        np.testing.assert_allclose(rot, p.getMatrixFromQuaternion(q.tolist()), rtol=0,
+                                   atol=1e-15)

@@ -40,9 +40,11 @@ def test_brakes_cannot_hold_beyond_the_mohr_coulomb_limit(make_sim):
     the braked front wheels reach the soil's shear strength c A + W tan φ (Lindgren Eq. 3) and
     the vehicle slides back, slowly and at exactly that force. On 20°: on 15° the castors'
     rate-independent compaction resistance (Coulomb-like at rest) makes up the 3 % the brakes
-    lack, and the vehicle holds."""
+    lack, and the vehicle holds. The shear limit alone, so without slip sinkage (with it the
+    sliding wheels dig in and hold: tests/sim/test_wheel_slip_sinkage.py)."""
     sim = make_sim("farm_2wd", "field_loam", "linear",
-                   TerrainSpec(kind="slope", slope_deg=20.0, downhill_azimuth_deg=180.0))
+                   TerrainSpec(kind="slope", slope_deg=20.0, downhill_azimuth_deg=180.0),
+                   force_options={"slip_sinkage": None})
     sim.reset(0.0, 0.0, 0.0)
     start = np.array(hold(sim, 2.0).position_m)
     end = np.array(hold(sim, 5.0).position_m)

@@ -184,12 +184,50 @@ def slip_sinkage_resistance_n(slip: float, compaction_n: float, n_exp: float, si
             + width_m * bulldozing_resistance_n_per_m(dug, cohesion_pa, phi, unit_weight))
 
 
+def dug_resistance_n(dug_m: float, compaction_n: float, n_exp: float, sinkage_m: float,
+                     width_m: float, cohesion_pa: float, phi: float,
+                     unit_weight: float) -> float:
+    """A wheel dug d below its static rut z0: the front bulldozes the dug soil, b R_b(d), and
+    the compaction grows from R_c0 to R_c0 ((z0 + d)/z0)^(n+1); 0 for d <= 0."""
+    if not dug_m > 0.0:
+        return 0.0
+    res = width_m * bulldozing_resistance_n_per_m(dug_m, cohesion_pa, phi, unit_weight)
+    if compaction_n and sinkage_m > 0.0:
+        res += compaction_n * (((sinkage_m + dug_m) / sinkage_m) ** (n_exp + 1.0) - 1.0)
+    return res
+
+
+def slip_sinkage_step(dug_m: float, rim: float, v_long: float, h: float, delta_m: float,
+                      cap_m: float) -> float:
+    """Backward Euler of sigma dd/dt = delta |r omega - v| - v_roll d, h = dt/sigma,
+    v_roll = min(|r omega|, |v|) when both point the same way (else 0), d in [0, cap]."""
+    slide = abs(rim - v_long)
+    roll = min(abs(rim), abs(v_long)) if rim * v_long > 0.0 else 0.0
+    d = (dug_m + h * delta_m * slide) / (1.0 + h * roll)
+    return min(max(d, 0.0), max(cap_m, 0.0))
+
+
+def kernel_sinkage_state(constants: tuple, dug_m: float, rim: float, v_long: float, h: float,
+                         load_n: float) -> tuple[float, float]:
+    """(dug, resistance) of the simulation's slip-sinkage state of one wheel over one substep:
+    delta = the constants' excavation depth, capped where the wheel is buried to its axle
+    (D/2 - z0)."""
+    (*_, s_gamma, s_exponent, width, diameter, k_c, k_phi, n_exp, cohesion, phi, unit_weight,
+     state, excavation) = constants
+    if not state or load_n <= 0.0:
+        return 0.0, 0.0
+    z0 = wheel_sinkage_m(load_n, width, diameter, k_c, k_phi, n_exp)
+    dug = slip_sinkage_step(dug_m, rim, v_long, h, excavation, diameter / 2.0 - z0)
+    return dug, dug_resistance_n(dug, s_gamma * load_n ** s_exponent, n_exp, z0, width,
+                                 cohesion, phi, unit_weight)
+
+
 def kernel(constants: tuple, slip: float, tan_beta: float,
            load_n: float) -> tuple[float, float, float]:
     """(fx, fy, resistance) of a force model bound to one soil (`models.KernelConstants`)."""
     (kind, ac, tan_phi, ratio, kappa, mu, c_x, c_y, a_x, a_y, scaled, gross, gross_c_x,
      w_ref, f_r, gamma, exponent, sinks, s_gamma, s_exponent, width, diameter, k_c, k_phi,
-     n_exp, cohesion, phi, unit_weight) = constants
+     n_exp, cohesion, phi, unit_weight, _state, _excavation) = constants
     if kind == 0:
         fx, fy = janosi_forces(slip, tan_beta, load_n, ac, tan_phi, ratio, kappa)
     elif kind == 1:

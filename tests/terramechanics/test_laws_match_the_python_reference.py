@@ -39,6 +39,8 @@ MODELS = [
                                                                       slip_sinkage="bulldozing"),
     ReinaForceModel(WHEEL, slip_sinkage="bulldozing"),
     ReinaForceModel(WHEEL, compaction=True, slip_sinkage="full", soil_unit_weight_n_m3=2e4),
+    ReinaForceModel(WHEEL, slip_sinkage="accumulated"),
+    JanosiForceModel(WHEEL, slip_sinkage="accumulated", excavation_depth_m=5e-3),
 ]
 
 
@@ -179,3 +181,29 @@ def test_slip_sinkage_and_bulldozing_laws_are_the_reference_laws(rng):
         args = (slip, rc0, n, z0, b, c, phi, gamma)
         assert close(_laws.slip_sinkage_resistance_n(*args), ref.slip_sinkage_resistance_n(*args),
                      scale=1e-3)
+
+
+def test_slip_sinkage_state_laws_are_the_reference_laws(rng):
+    """The dug-depth step, the resistance of a dug depth and the loop's per-substep state of
+    a bound model (``laws_kernel_sinkage_state``) against their transcriptions."""
+    for _ in range(N):
+        phi, c, gamma = rng.uniform(0.0, 1.2), rng.uniform(0.0, 2e4), rng.uniform(0.0, 2.5e4)
+        rc0, n, z0, b = rng.uniform(0.0, 500.0), rng.uniform(0.2, 2.0), *rng.uniform(0.0, 0.2, 2)
+        dug = rng.uniform(-0.01, 0.3)
+        args = (dug, rc0, n, z0, b, c, phi, gamma)
+        assert close(_laws.dug_resistance_n(*args), ref.dug_resistance_n(*args), scale=1e-3)
+        rim, v = rng.uniform(-3.0, 3.0, 2)
+        if rng.uniform() < 0.2:
+            rim = v * rng.choice([0.0, 1.0])  # locked, or rolling without slip
+        h, delta, cap = rng.uniform(0.0, 0.5), rng.uniform(0.0, 0.01), rng.uniform(-0.01, 0.2)
+        step = (dug, rim, v, h, delta, cap)
+        assert close(_laws.slip_sinkage_step(*step), ref.slip_sinkage_step(*step), scale=1e-3)
+    for model in MODELS:
+        for soil_name in sorted(SOILS):
+            constants = tuple(model.kernel_constants(SOILS[soil_name].params()))
+            for _ in range(20):
+                dug, rim, v = rng.uniform(0.0, 0.1), *rng.uniform(-2.0, 2.0, 2)
+                h, load = rng.uniform(0.0, 0.3), rng.uniform(-10.0, 2000.0)
+                got = _laws.kernel_sinkage_state(constants, dug, rim, v, h, load)
+                want = ref.kernel_sinkage_state(constants, dug, rim, v, h, load)
+                assert close(got, want, scale=1e-3)

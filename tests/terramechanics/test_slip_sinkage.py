@@ -1,6 +1,8 @@
 """Slip sinkage (Lyasko 2010) and the wheel's frontal bulldozing (Bekker 1956): closed forms at
 known inputs, zero at zero slip, monotone in |slip|, and a resistance the soil never turns into
-positive work."""
+positive work; the slip sinkage as a state (the depth dug grows with the distance slid and
+relaxes over the distance rolled): its steady state, its relaxation length, its growth with
+nothing rolled."""
 
 from __future__ import annotations
 
@@ -12,9 +14,13 @@ import pytest
 from slipenv.terramechanics import _laws, bekker, sidewall, slip_dynamics
 from slipenv.terramechanics.contact import ContactGeometry
 from slipenv.terramechanics.models import (
+    DEFAULT_EXCAVATION_DEPTH_M,
+    WHEEL_SLIP_SINKAGE,
     JanosiForceModel,
     LinearSlipForceModel,
     ReinaForceModel,
+    dug_depth_resistance,
+    dug_depth_step,
     slip_sinkage_resistance,
     wheel_kernel,
 )
@@ -78,9 +84,11 @@ def _model_resistance(model, soil, slip, load):
 
 
 @pytest.mark.parametrize("cls", [JanosiForceModel, LinearSlipForceModel, ReinaForceModel])
-def test_the_option_is_off_by_default_and_the_resistance_then_ignores_slip(cls):
-    model = cls(ROVER_WHEEL)
-    assert model.slip_sinkage is None and not model.kernel_constants(SAND).slip_sinkage
+def test_the_default_is_the_wheels_default_and_off_the_resistance_ignores_slip(cls):
+    assert cls(ROVER_WHEEL).slip_sinkage == WHEEL_SLIP_SINKAGE
+    model = cls(ROVER_WHEEL, slip_sinkage=None)
+    k = model.kernel_constants(SAND)
+    assert model.slip_sinkage is None and not k.slip_sinkage and not k.sinkage_state
     r = [_model_resistance(model, SAND, s, 60.0) for s in (-1.0, -0.3, 0.0, 0.3, 1.0)]
     assert r == pytest.approx([r[2]] * 5, rel=1e-15)
 
@@ -163,3 +171,111 @@ def test_the_tracks_array_factor_is_the_wheels_c_law():
     slips = np.linspace(-0.5, 1.5, 401)
     want = [bekker.slip_sinkage_factor(s) for s in slips.tolist()]
     assert track.slip_sinkage_factor(slips) == pytest.approx(want, rel=1e-15)
+
+
+# -- slip sinkage as a state: the depth dug grows with the distance slid, relaxes over the
+# -- distance rolled (models.dug_depth_step, C laws_slip_sinkage_step)
+
+DELTA, SIGMA, DT = 0.004, 0.06, 1e-4
+
+
+def _run_state(dug, rim, v, seconds, cap=1.0):
+    h = DT / SIGMA
+    for _ in range(round(seconds / DT)):
+        dug = dug_depth_step(dug, rim, v, h, DELTA, cap)
+    return dug
+
+
+@pytest.mark.parametrize(("rim", "v"), [(1.0, 0.7), (0.5, 0.1), (0.4, 0.5), (0.1, 0.6),
+                                         (-1.0, -0.6), (-0.3, -0.9)])
+def test_state_settles_at_delta_slide_over_roll(rim, v):
+    """Steady state of sigma dd/dt = delta |r omega - v| - v_roll d: delta s/(1 - |s|), s the
+    slip over the larger speed, driving or braking, forward or in reverse."""
+    slip = (rim - v) / max(abs(rim), abs(v))
+    want = DELTA * abs(slip) / (1.0 - abs(slip))
+    assert want == pytest.approx(DELTA * abs(rim - v) / min(abs(rim), abs(v)), rel=1e-12)
+    # from below and from above: the same fixed point of the backward-Euler map
+    seconds = 40.0 * SIGMA / min(abs(rim), abs(v))
+    for start in (0.0, 3.0 * want):
+        assert _run_state(start, rim, v, seconds) == pytest.approx(want, rel=1e-9)
+    h = DT / SIGMA
+    assert dug_depth_step(want, rim, v, h, DELTA, 1.0) == pytest.approx(want, rel=1e-13)
+
+
+@pytest.mark.parametrize("v", [0.05, 0.5, 2.0])
+def test_rolling_without_slip_relaxes_over_one_patch_length(v):
+    """Pure rolling (r omega = v): d(x) = d0 exp(-x/sigma) over the distance x rolled, at any
+    speed: exactly d0 (1 + h v)^(-n) after n steps of backward Euler, which is exp(-x/sigma)
+    to within (x/sigma) h v/2 (0.5 % at 3 sigma and h v = 3.3e-3)."""
+    d0, h = 0.01, DT / SIGMA
+    for x in (SIGMA, 3.0 * SIGMA):
+        n = round(x / v / DT)
+        got = _run_state(d0, v, v, x / v)
+        assert got == pytest.approx(d0 * (1.0 + h * v) ** -n, rel=1e-10)
+        bound = 0.6 * (x / SIGMA) * h * v
+        assert got == pytest.approx(d0 * math.exp(-x / SIGMA), rel=bound)
+
+
+@pytest.mark.parametrize(("rim", "v"), [(0.8, 0.0), (0.0, -0.8), (0.5, -0.3)])
+def test_with_nothing_rolled_the_wheel_digs_delta_per_patch_length_slid_up_to_the_cap(rim, v):
+    """Spinning in place, locked and skidding, or spinning against the travel: v_roll = 0, so
+    d = delta x/sigma over the distance x slid, until the cap (buried to the axle)."""
+    slid = abs(rim - v) * 0.05
+    assert _run_state(0.0, rim, v, 0.05) == pytest.approx(DELTA * slid / SIGMA, rel=1e-9)
+    assert _run_state(0.0, rim, v, 5.0, cap=0.03) == 0.03
+
+
+def test_dug_resistance_at_lyaskos_depth_is_the_instantaneous_law():
+    args = (12.0, 1.1, 0.02, 0.08, 600.0, math.radians(29.0), 1.5e4)
+    for slip in (0.1, 0.5, 1.0, -0.7):
+        dug = 0.02 * (bekker.slip_sinkage_factor(abs(slip)) - 1.0)
+        assert _laws.dug_resistance_n(dug, *args) == pytest.approx(
+            _laws.slip_sinkage_resistance_n(slip, *args), rel=1e-12)
+    assert _laws.dug_resistance_n(0.0, *args) == 0.0
+    assert _laws.dug_resistance_n(-0.01, *args) == 0.0
+
+
+def test_accumulated_mode_binds_the_state_and_leaves_the_kernel_stateless():
+    """The kernel has no memory: in the "accumulated" mode its resistance ignores the slip and
+    the simulation's state adds the bulldozing of the depth dug (`dug_depth_resistance`)."""
+    model = ReinaForceModel(ROVER_WHEEL, slip_sinkage="accumulated")
+    k = model.kernel_constants(SAND)
+    assert k.sinkage_state and not k.slip_sinkage and k.sinkage_gamma == 0.0
+    assert k.excavation_depth_m == DEFAULT_EXCAVATION_DEPTH_M
+    r = [_model_resistance(model, SAND, s, 60.0) for s in (-1.0, 0.0, 0.4, 1.0)]
+    assert r == pytest.approx([r[1]] * 4, rel=1e-15)
+    load, dug = 60.0, 0.015
+    want = ROVER_WHEEL.width_m * float(sidewall.bulldozing_resistance_n_per_m(
+        dug, SAND.cohesion_pa, SAND.friction_angle_rad, model.soil_unit_weight_n_m3))
+    assert dug_depth_resistance(dug, load, k) == pytest.approx(want, rel=1e-12)
+    # one substep of the loop's state: delta = the model's depth, then that resistance
+    z0 = bekker.wheel_sinkage_float_m(load, ROVER_WHEEL.width_m, 0.18, SAND.k_c, SAND.k_phi,
+                                      SAND.n_exp)
+    h = 1e-3 / 0.05
+    dug1, res1 = _laws.kernel_sinkage_state(tuple(k), dug, 0.3, 0.1, h, load)
+    assert dug1 == pytest.approx(
+        dug_depth_step(dug, 0.3, 0.1, h, DEFAULT_EXCAVATION_DEPTH_M, 0.09 - z0), rel=1e-14)
+    assert res1 == pytest.approx(dug_depth_resistance(dug1, load, k), rel=1e-12)
+    assert _laws.kernel_sinkage_state(tuple(k), dug, 0.3, 0.1, h, 0.0) == (0.0, 0.0)
+    off = ReinaForceModel(ROVER_WHEEL, slip_sinkage=None).kernel_constants(SAND)
+    assert _laws.kernel_sinkage_state(tuple(off), dug, 0.3, 0.1, h, load) == (0.0, 0.0)
+
+
+def test_excavation_depth_m_is_validated():
+    with pytest.raises(ValueError, match="excavation_depth_m"):
+        ReinaForceModel(ROVER_WHEEL, slip_sinkage="accumulated", excavation_depth_m=-0.1)
+    with pytest.raises(ValueError, match="excavation_depth_m"):
+        JanosiForceModel(ROVER_WHEEL, slip_sinkage="accumulated", excavation_depth_m=math.nan)
+
+
+def test_the_wheels_default_mode_never_reaches_a_track(monkeypatch):
+    """Whatever the wheels' default (`models.WHEEL_SLIP_SINKAGE`), a track's contact, which has
+    its own law, builds without slip sinkage; asked for another mode, it still refuses."""
+    from slipenv.terramechanics import models
+    monkeypatch.setattr(models, "WHEEL_SLIP_SINKAGE", "accumulated")
+    track = ContactGeometry(radius_m=0.05, width_m=0.1, contact_length_m=0.4,
+                            track_length_m=0.4)
+    assert JanosiForceModel(track, slip_sinkage="accumulated").slip_sinkage is None
+    assert ReinaForceModel(ROVER_WHEEL, slip_sinkage="accumulated").slip_sinkage == "accumulated"
+    with pytest.raises(ValueError, match="track"):
+        JanosiForceModel(track, slip_sinkage="bulldozing")

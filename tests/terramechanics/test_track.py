@@ -14,6 +14,7 @@ from slipenv.terramechanics.track import (
     berm_height_m,
     cell_forces,
     load_spread_matrix,
+    passive_coefficient,
     passive_pressure_n_per_m,
     rut_resistance_n,
     shear_direction,
@@ -35,17 +36,30 @@ E_MAX = 1e-3  # [m] the direction state's length (slipenv.sim.track_soil default
 X_CELL = L / 2 - DX * (np.arange(N) + 0.5)
 
 
+def per_track(n_t, *values):
+    """Each value as an array of one entry per track (the functions take the soil per track)."""
+    out = tuple(np.full(n_t, float(v)) for v in values)
+    return out if len(out) > 1 else out[0]
+
+
+def soil(n_t, cohesion=C):
+    """(b, c, tan phi, K) per track."""
+    return per_track(n_t, B_W, cohesion, TAN_PHI, K)
+
+
 def _steady(vx, vy, omega, ys, us, t_end=8.0, pressure=P):
     """Run the transient scheme at fixed kinematics to steady state; per track F_x, F_y, the
     yaw moment about the hull centre and the moment of the lateral forces b int x tau_y."""
     n_t = len(ys)
     j, e = np.zeros((2, n_t, N + 1)), np.zeros((2, n_t, N))
     ys_a = np.asarray(ys, float)
-    x_cells = np.broadcast_to(X_CELL, (n_t, N))
+    us = np.asarray(us, float)
+    x_cells = np.ascontiguousarray(np.broadcast_to(X_CELL, (n_t, N)))
     vc = sliding_velocity(vx - omega * ys_a, us, np.full(n_t, vy), omega, x_cells)
     for _ in range(int(t_end / DT)):
         advance_shear(j, e, vc, us, omega, DX, DT, E_MAX)
-    (fx, fy), _ = cell_forces(j, e, np.full((n_t, N), pressure), B_W, DX, C, TAN_PHI, K)
+    b, c, tan_phi, k = soil(n_t)
+    (fx, fy), _ = cell_forces(j, e, np.full((n_t, N), pressure), b, DX, c, tan_phi, k)
     mz = (X_CELL * fy).sum(axis=1) - ys_a * fx.sum(axis=1)
     return fx.sum(axis=1), fy.sum(axis=1), mz, (X_CELL * fy).sum(axis=1)
 
@@ -106,10 +120,9 @@ def test_in_a_steady_turn_the_shear_field_is_wong_chiangs_path_integral(
     half = 0.205
     omega = v / radius
     ys = np.array([-half, half])
-    us = [(radius + half) * omega / ratio_outer, (radius - half) * omega / ratio_inner]
+    us = np.array([(radius + half) * omega / ratio_outer, (radius - half) * omega / ratio_inner])
     j, e = np.zeros((2, 2, N + 1)), np.zeros((2, 2, N))
-    vc = sliding_velocity(v - omega * ys, us, np.full(2, vy), omega,
-                          np.broadcast_to(X_CELL, (2, N)))
+    vc = sliding_velocity(v - omega * ys, us, np.full(2, vy), omega, np.array([X_CELL, X_CELL]))
     for _ in range(int((3 * L / min(us) + 2.0) / DT)):
         advance_shear(j, e, vc, us, omega, DX, DT, E_MAX)
     faces = L / 2 - DX * np.arange(N + 1)
@@ -144,11 +157,11 @@ def test_sliding_steadily_the_direction_state_settles_at_e_max_along_the_sliding
     j, e = np.zeros((2, 1, N + 1)), np.zeros((2, 1, N))
     v = np.stack((np.full((1, N), 0.03), np.full((1, N), -0.04)))  # 5 cm/s, belt at rest
     for _ in range(240):  # 5 cm of sliding: 50 e_max
-        advance_shear(j, e, v, [0.0], 0.0, DX, DT, E_MAX)
+        advance_shear(j, e, v, np.zeros(1), 0.0, DX, DT, E_MAX)
     np.testing.assert_allclose(e[:, 0], E_MAX * v[:, 0] / 0.05, rtol=1e-9)
     v[0] *= -1.0  # the sliding turns by 106 degrees
     for _ in range(12):  # 2.5 mm of sliding
-        advance_shear(j, e, v, [0.0], 0.0, DX, DT, E_MAX)
+        advance_shear(j, e, v, np.zeros(1), 0.0, DX, DT, E_MAX)
     assert (e[0] < 0.0).all()
 
 
@@ -169,7 +182,8 @@ def test_the_cell_stiffness_is_the_derivative_of_the_janosi_stress():
         j[0] = jx  # both faces: the cell's j is jx
         e = np.zeros((2, 4, 1))
         e[0] = -1.0  # the stress pushes +x
-        return cell_forces(j, e, pressure, B_W, DX, C, TAN_PHI, K)
+        b, c, tan_phi, k = soil(4)
+        return cell_forces(j, e, pressure, b, DX, c, tan_phi, k)
 
     (fx, fy), k = force(j_abs)
     h = 1e-7
@@ -205,10 +219,11 @@ def test_lateral_force_saturates_at_mohr_coulomb_plus_bulldozing():
     walls = np.zeros((2, 2, 1, N))
     vc = np.stack((np.zeros((1, N)), np.full((1, N), -0.02)))
     for _ in range(int(10.0 / DT)):
-        advance_shear(j, e, vc, [0.0], 0.0, DX, DT, E_MAX)
-        advance_wall(walls, vc[1], [0.0], np.full((1, N), z), DX, DT)
-    (_, fy), _ = cell_forces(j, e, np.full((1, N), P), B_W, DX, C, TAN_PHI, K)
-    wall = wall_force_n_per_m(walls, np.full((1, N), z), gamma, C, PHI, 0.1) * DX
+        advance_shear(j, e, vc, np.zeros(1), 0.0, DX, DT, E_MAX)
+        advance_wall(walls, vc[1], np.zeros(1), np.full((1, N), z), DX, DT)
+    b, c, tan_phi, k = soil(1)
+    (_, fy), _ = cell_forces(j, e, np.full((1, N), P), b, DX, c, tan_phi, k)
+    wall = wall_force_n_per_m(walls, np.full((1, N), z), gamma, *per_track(1, C, PHI), 0.1) * DX
     mohr_coulomb = B_W * L * (C + P * TAN_PHI)
     assert fy.sum() == pytest.approx(mohr_coulomb, rel=1e-3)
     # The berm is the swept volume z |d| as a ridge at the angle of repose.
@@ -216,7 +231,8 @@ def test_lateral_force_saturates_at_mohr_coulomb_plus_bulldozing():
     assert berm[1, 0, 0] == pytest.approx(z * 0.2, rel=1e-6)  # right side, pushed into
     assert berm[0].max() == 0.0 and d[0].max() == 0.0  # the left wall moved away
     h = z + float(berm_height_m(z * 0.2, PHI))
-    assert wall.sum() == pytest.approx(L * passive_pressure_n_per_m(h, gamma, C, PHI), rel=1e-3)
+    thrust = passive_pressure_n_per_m(h, gamma, C, passive_coefficient(PHI))
+    assert wall.sum() == pytest.approx(L * thrust, rel=1e-3)
     assert wall.sum() > 0.0  # pushing -y, the soil pushes back +y
 
 
@@ -226,9 +242,9 @@ def test_the_berm_makes_the_side_force_grow_with_lateral_displacement():
     for t_end in (0.25, 1.0, 3.0):
         walls = np.zeros((2, 2, 1, N))
         for _ in range(int(t_end * 240)):
-            advance_wall(walls, np.full((1, N), 0.02), [0.0], np.full((1, N), z), DX, DT)
-        forces.append(-wall_force_n_per_m(walls, np.full((1, N), z), gamma, 0.0, PHI,
-                                          0.1).sum())
+            advance_wall(walls, np.full((1, N), 0.02), np.zeros(1), np.full((1, N), z), DX, DT)
+        forces.append(-wall_force_n_per_m(walls, np.full((1, N), z), gamma,
+                                          *per_track(1, 0.0, PHI), 0.1).sum())
     assert forces[0] < forces[1] < forces[2]
 
 
@@ -240,8 +256,8 @@ def test_in_a_pivot_turn_the_walls_resist_the_turn_and_add_no_net_side_force():
     walls = np.zeros((2, 2, 1, N))
     vy = (omega * X_CELL)[None, :]
     for _ in range(240):
-        advance_wall(walls, vy, [0.0], np.full((1, N), z), DX, DT)
-    f = wall_force_n_per_m(walls, np.full((1, N), z), 14e3, 0.0, PHI, 0.1)[0] * DX
+        advance_wall(walls, vy, np.zeros(1), np.full((1, N), z), DX, DT)
+    f = wall_force_n_per_m(walls, np.full((1, N), z), 14e3, *per_track(1, 0.0, PHI), 0.1)[0] * DX
     assert abs(f.sum()) < 1e-9 * np.abs(f).sum()
     assert (X_CELL * f).sum() < 0.0  # resists the counter-clockwise turn
     assert (f[X_CELL > 0] < 0).all() and (f[X_CELL < 0] > 0).all()
@@ -255,12 +271,12 @@ def test_driving_on_the_walls_and_berms_leave_with_the_ground(speed):
     (first-order upwinding smears the front of the fresh soil over about one)."""
     z = 0.004
     start = np.zeros((2, 2, 1, N))
-    advance_wall(start, np.full((1, N), -0.02), [0.0], np.full((1, N), z), DX, 0.5)
+    advance_wall(start, np.full((1, N), -0.02), np.zeros(1), np.full((1, N), z), DX, 0.5)
     assert start[:, 1].min() > 0.0 and not start[:, 0].any()  # the right side, pushed into
     for travel, kept in ((0.25 * L, 0.75), (0.5 * L, 0.5), (2.0 * L, 0.0)):
         walls = start.copy()
         for _ in range(round(travel / abs(speed) / DT)):
-            advance_wall(walls, np.zeros((1, N)), [speed], np.full((1, N), z), DX, DT)
+            advance_wall(walls, np.zeros((1, N)), np.array([speed]), np.full((1, N), z), DX, DT)
         share = walls[:, 1].sum(axis=-1) / start[:, 1].sum(axis=-1)
         np.testing.assert_allclose(share, kept, atol=1e-3)
         if kept == 0.5:  # fresh soil has come in at the entry end
@@ -270,7 +286,8 @@ def test_driving_on_the_walls_and_berms_leave_with_the_ground(speed):
 
 def test_passive_pressure_is_rankine():
     n_phi = math.tan(math.radians(45 + 15)) ** 2
-    assert passive_pressure_n_per_m(0.1, 15e3, 500.0, math.radians(30)) == pytest.approx(
+    assert passive_coefficient(math.radians(30)) == pytest.approx(n_phi, rel=1e-12)
+    assert passive_pressure_n_per_m(0.1, 15e3, 500.0, n_phi) == pytest.approx(
         0.5 * 15e3 * 0.01 * n_phi + 2 * 500 * 0.1 * math.sqrt(n_phi))
 
 

@@ -47,12 +47,16 @@ def test_fit_soil_bad_file_exits_2_naming_file_row_and_column(tmp_path, capsys):
     assert not (tmp_path / "x.json").exists()
 
 
-def test_fit_soil_writes_a_rejected_fit_only_as_rejected_soil_and_says_so(peaked_bed_dir,
+def test_fit_soil_writes_a_rejected_fit_only_as_rejected_soil_and_exits_1(peaked_bed_dir,
                                                                           tmp_path, capsys):
     out = tmp_path / "fit.json"
-    assert main(["fit-soil", str(peaked_bed_dir), "--json", str(out)]) == 0
+    assert main(["fit-soil", str(peaked_bed_dir), "--json", str(out)]) == 1
     report = json.loads(out.read_text())
     assert report["accepted"] is False and "soil" not in report
     assert Soil(**report["rejected_soil"]).mu > 0.0  # kept for inspection
-    printed = capsys.readouterr().out
-    assert "soil: NOT accepted" in printed and "warning: soil not accepted" in printed
+    captured = capsys.readouterr()
+    assert "soil: NOT accepted" in captured.out and "warning: soil not accepted" in captured.out
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1, captured.err
+    assert "soil rejected" in err[0] and "'rejected_soil'" in err[0] and str(out) in err[0]
+    assert "the verdict rejects reina" in err[0]  # the report's own reason, one line

@@ -10,9 +10,11 @@ Each drive of ``slipenv/FarmField-v0`` records its raw sensor frames (:mod:`.rec
 the EKF schemes run offline over the same frames (:mod:`.filters`), as in the paper; the
 statistics are in :mod:`.metrics`, the paper's numbers in :mod:`.paper`, the settings and
 why they have their values in :mod:`.settings`. Both experiments run in two blocks on the same
-paths and seeds: the headline, and a robust block in the curved Janosi/Okello
-world with the estimator's default soil random walk and a radius for the no-slip filter measured
-as the paper's operators did (:mod:`.calibration`). :func:`run` (:mod:`.experiment`) prints the
+paths and seeds: the headline, in the world the filter does not assume (the curved
+Janosi/Okello law, the estimator's default process noise, per-wheel radii for the no-slip
+filter measured as the paper's operators did, :mod:`.calibration`), and an ablation with the
+filter's own linear law in the world; :mod:`.regime` places the field's operating point on the
+paper's torque/slip curve. :func:`run` (:mod:`.experiment`) prints the
 paper-vs-simulation table (:mod:`.report`), saves the figures (:mod:`.plots`), the JSON and,
 with ``docs_dir``, the results page (:mod:`.docs`, ``docs/reproductions/lindgren.md``), where
 the measured numbers and the discussion of what differs from the paper live.
@@ -24,28 +26,34 @@ from .filters import FilterRun, pose_errors, run_filter
 from .metrics import circles_metrics, dropout_experiment
 from .paper import PAPER
 from .recording import FrameRecorder, Recording, record
+from .regime import curve_position, okello_bracket, operating_point
 from .settings import (
+    ABLATION,
+    BLOCKS,
     FIELD_NOISE,
     FILTER,
     FULL,
     HEADLINE,
     QUICK,
-    ROBUST,
-    VARIANTS,
+    SLIP_SCHEMES,
     Config,
     Setting,
     Variant,
 )
 
 __all__ = [
+    "ABLATION",
+    "BLOCKS",
     "FIELD_NOISE",
     "FILTER",
     "FULL",
     "HEADLINE",
     "PAPER",
     "QUICK",
-    "ROBUST",
-    "VARIANTS",
+    "SLIP_SCHEMES",
+    "curve_position",
+    "okello_bracket",
+    "operating_point",
     "Config",
     "Setting",
     "Variant",

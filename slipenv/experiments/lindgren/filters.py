@@ -11,10 +11,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from slipenv.contracts import wrap_angles
+from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.lindgren import LindgrenEKF
 
 from .recording import Recording, quiet_estimator
-from .settings import HEADLINE, Variant
+from .settings import HEADLINE, LATERAL, LATERAL_FILTERS, Variant
 
 
 @dataclass
@@ -44,26 +45,38 @@ def run_filter(rec: Recording, name: str, cut_s: float = math.inf,
 
     Bearings after ``cut_s`` [s] are removed; ``inertial=False`` removes the gyro,
     accelerometer and inclinometer readings (laser and odometers only). The no-slip schemes
-    (2, 3) use the recording's measured radius if it has one.
+    (2, 3) use the recording's measured radii if it has them (:func:`no_slip_odometry`); the
+    slip-model schemes carry the lateral slip gain (:data:`~.settings.LATERAL`) unless the
+    variant says otherwise (:attr:`~.settings.Variant.lateral`).
     """
     variant = variants[name] if name in variants else Variant(name)
     scheme = variant.scheme
-    params = dataclasses.replace(rec.params, **variant.noise)
-    geometry = rec.geometry
-    if (scheme in ("scheme2", "scheme3") and rec.no_slip_radius_m is not None
+    with_lateral = (scheme in LATERAL_FILTERS if variant.lateral is None else variant.lateral)
+    lateral = LATERAL if with_lateral else {}
+    params = dataclasses.replace(rec.params, **{**lateral, **variant.noise})
+    geometry, count_scale = rec.geometry, None
+    if (scheme in ("scheme2", "scheme3") and rec.no_slip_radii_m is not None
             and not variant.nominal_radius):
-        geometry = dataclasses.replace(geometry, wheel_radius_m=rec.no_slip_radius_m)
+        if variant.one_radius:
+            assert rec.no_slip_radius_m is not None  # measured with the per-side radii
+            geometry = dataclasses.replace(geometry, wheel_radius_m=rec.no_slip_radius_m)
+        else:
+            radius, count_scale = no_slip_odometry(rec.no_slip_radii_m, geometry)
+            geometry = dataclasses.replace(geometry, wheel_radius_m=radius)
     oracle = rec.oracle if scheme == "oracle" else None
     if oracle is not None and variant.secant_k_s:
         if rec.k_s_secant_nm is None:
             raise ValueError(f"{name}: the recording has no calibration (secant k_s)")
         oracle = dataclasses.replace(oracle, k_s=(rec.k_s_secant_nm,) * 2)
-    ekf = LindgrenEKF(geometry, scheme=4 if oracle else int(scheme[-1]), params=params,
+    ekf = LindgrenEKF(geometry, scheme=4 if oracle else int(scheme.removeprefix("scheme")),
+                      params=params,
                       beacons_xy=rec.beacons_xy, oracle=oracle)
     none = np.zeros(0)
     est, cov = [], []
     with quiet_estimator():
         for k, frame in enumerate(rec.frames):
+            if count_scale is not None:
+                frame = dataclasses.replace(frame, enc_counts=frame.enc_counts * count_scale)
             if frame.t_s > cut_s:
                 frame = dataclasses.replace(frame, beacon_bearings_rad=none, beacon_times_s=none)
             if not inertial:
@@ -76,6 +89,29 @@ def run_filter(rec: Recording, name: str, cut_s: float = math.inf,
     return FilterRun(np.array(est), np.array(cov), ekf)
 
 
+def no_slip_odometry(radii_m: tuple[float, float],
+                     geometry: OdometryGeometry) -> tuple[float, np.ndarray]:
+    """One radius and a per-wheel count scale that give a one-radius no-slip filter (Lindgren
+    Eq. 15) each wheel's own effective radius.
+
+    The no-slip model holds one R_w; a wheel of radius R_i turning c counts covers
+    c R_i / Γ, which is what c R_i / R counts of a wheel of radius R cover. So the counts of
+    each side are scaled by R_i / R, with R the mean of the two: the per-wheel odometer
+    calibration an operator with one radius in the filter would apply.
+
+    Returns
+    -------
+    tuple
+        (R [m], scale per wheel of the frames' ``enc_counts``, shape (n_wheels,)).
+    """
+    radius = float(np.mean(radii_m))
+    n = 1 + max(geometry.left + geometry.right)
+    scale = np.ones(n)
+    for side, r in zip((geometry.left, geometry.right), radii_m, strict=True):
+        scale[list(side)] = r / radius
+    return radius, scale
+
+
 def pose_errors(run: FilterRun, truth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Position error [m], shape (K,), and (x, y, yaw) error truth - estimate, shape (K, 3),
     the yaw error wrapped to (-π, π]."""
@@ -85,6 +121,9 @@ def pose_errors(run: FilterRun, truth: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 
 def soil_estimate(run: FilterRun) -> dict:
-    """The filter's final soil states: effective radii R_w [m] and k_s [N m], left/right."""
+    """The filter's final soil states: effective radii R_w [m] and k_s [N m], left/right, and
+    any further float states a slip-model scheme reports in its extras (``other``)."""
     x = run.ekf.estimate().extras
-    return {"R_w_m": [x["R_wl_m"], x["R_wr_m"]], "k_s": [x["k_sl"], x["k_sr"]]}
+    known = {"R_wl_m", "R_wr_m", "k_sl", "k_sr", "n_bearings_used", "n_skipped", "skipped"}
+    return {"R_w_m": [x.get("R_wl_m"), x.get("R_wr_m")], "k_s": [x.get("k_sl"), x.get("k_sr")],
+            "other": {k: v for k, v in x.items() if k not in known and isinstance(v, float)}}

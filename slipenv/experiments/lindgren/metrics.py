@@ -24,7 +24,7 @@ from slipenv.paths import Path
 from ..progress import iterate
 from .filters import FilterRun, pose_errors, run_filter, soil_estimate
 from .recording import Recording, record
-from .settings import CUT_S, DROPOUT_FILTERS, HEADLINE, LAGS, SETTLE_M, Setting
+from .settings import CUT_S, DROPOUT_FILTERS, HEADLINE, LAGS, SETTLE_M, SLIP_SCHEMES, Setting
 
 
 def circles_metrics(rec: Recording, runs: dict[str, FilterRun]) -> tuple[dict, dict]:
@@ -69,6 +69,7 @@ def circles_metrics(rec: Recording, runs: dict[str, FilterRun]) -> tuple[dict, d
     # NEES samples are correlated in time: this band is what independent samples would give
     out["nees_pose"]["band_if_independent"] = list(chi2_mean_band(int(w.sum()), 3))
     out["soil_estimate_scheme4"] = soil_estimate(runs["scheme4"])
+    out["soil_estimate"] = {s: soil_estimate(runs[s]) for s in SLIP_SCHEMES if s in runs}
     out["soil_true"] = {"R_w_m": list(rec.oracle.wheel_radius_m), "k_s": list(rec.oracle.k_s)}
     out["window_s"] = [float(t0), float(t1)]
     return out, rho
@@ -133,8 +134,9 @@ def dropout_experiment(path: Path, seeds: list[int], progress: bool = False,
     """Fig. 7 on one drive per seed: laser + odometry, bearings removed after ``CUT_S``.
 
     Returns (metrics, the first drive's Recording, its FilterRuns). The metrics average the
-    final errors of schemes 3, 4, the oracle and the block's variants (``setting.variants``)
-    over the drives and list each one. ``setting`` and ``calibration`` go to
+    final errors of schemes 3, the slip-model schemes, the oracle and the block's variants
+    (``setting.variants``) over the drives and list each one; ``error_at_cut_m`` is the mean
+    position error when the bearings stopped. ``setting`` and ``calibration`` go to
     :func:`~.recording.record`.
     """
     if not seeds:
@@ -146,6 +148,7 @@ def dropout_experiment(path: Path, seeds: list[int], progress: bool = False,
 
     per_run: dict[str, list] = {k: [] for k in names}
     heading: dict[str, list] = {k: [] for k in names}
+    at_cut: dict[str, list] = {k: [] for k in names}
     first: tuple[Recording, dict[str, FilterRun],
                  dict[str, tuple[np.ndarray, np.ndarray]]] | None = None
     for seed in iterate(seeds, progress, f"dropout drives, {setting.name}"):
@@ -156,15 +159,20 @@ def dropout_experiment(path: Path, seeds: list[int], progress: bool = False,
         first = first or (rec, runs, errors)
         for name in names:
             per_run[name].append(float(errors[name][0][-1]))
+            # where the error stood when the bearings stopped: before or after the cut?
+            k_cut = min(int(np.searchsorted(rec.t_s, CUT_S * cut_factor(name))),
+                        len(rec.t_s) - 1)
+            at_cut[name].append(float(errors[name][0][k_cut]))
             heading[name].append(float(np.degrees(abs(errors[name][1][-1, 2]))))
     assert first is not None  # seeds is not empty
     rec, runs, errors = first
     metrics = {"final_error_m": {k: float(np.mean(v)) for k, v in per_run.items()},
                "final_error_m_per_drive": per_run,
                "final_heading_error_deg": {k: float(np.mean(v)) for k, v in heading.items()},
+               "error_at_cut_m": {k: float(np.mean(v)) for k, v in at_cut.items()},
                "first_drive_final_error_m": {k: float(e[0][-1]) for k, e in errors.items()},
                "first_drive_soil_estimate": {k: soil_estimate(runs[k]) for k in runs
-                                             if "4" in k},
+                                             if k.startswith((*SLIP_SCHEMES, "oracle"))},
                "first_drive_torque_slip": torque_slip(rec),
                "soil_true": {"R_w_m": list(rec.oracle.wheel_radius_m),
                              "k_s": list(rec.oracle.k_s)},

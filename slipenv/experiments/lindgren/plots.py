@@ -9,11 +9,10 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
-TITLES = {  # Lindgren Fig. 4 captions
+TITLES = {  # Lindgren Fig. 4 captions; panel (d) is the block's slip model
     "scheme1": "(a) scheme 1: laser + inertial",
     "scheme2": "(b) scheme 2: dead reckoning only",
     "scheme3": "(c) scheme 3: all sensors, slip unmodelled",
-    "scheme4": "(d) scheme 4: all sensors, slip model",
 }
 
 
@@ -31,11 +30,14 @@ def _reference(ax, path) -> None:
     ax.plot(samples.x_m, samples.y_m, color="0.6", ls="--", lw=0.8, label="commanded path")
 
 
-def plot_paths(rec, runs: dict, circ: dict, out_png: str | FsPath) -> FsPath:
-    """Fig. 4: the path of schemes 1-4 against the true path, on Lindgren's circles."""
+def plot_paths(rec, runs: dict, circ: dict, out_png: str | FsPath,
+               slip: str = "scheme4") -> FsPath:
+    """Fig. 4: the path of schemes 1-3 and the slip model ``slip`` against the true path, on
+    Lindgren's circles."""
     plt = _pyplot()
     fig, axes = plt.subplots(2, 2, figsize=(11, 10))
-    for ax, (name, title) in zip(axes.ravel(), TITLES.items(), strict=True):
+    titles = {**TITLES, slip: f"(d) {slip}: all sensors, slip model"}
+    for ax, (name, title) in zip(axes.ravel(), titles.items(), strict=True):
         _reference(ax, rec.path)
         ax.plot(rec.truth[:, 0], rec.truth[:, 1], color="k", lw=1.6, label="true path")
         ax.plot(runs[name].est[:, 0], runs[name].est[:, 1], color="C3", lw=1.0,
@@ -53,14 +55,15 @@ def plot_paths(rec, runs: dict, circ: dict, out_png: str | FsPath) -> FsPath:
     return _save(fig, out_png)
 
 
-def plot_dropout(rec, runs: dict, out_png: str | FsPath, cut_s: float) -> FsPath:
+def plot_dropout(rec, runs: dict, out_png: str | FsPath, cut_s: float,
+                 slip: str = "scheme4") -> FsPath:
     """Fig. 7 for one drive: laser + odometry, laser cut at ``cut_s``; (a) no slip model,
-    (b) slip model, with the oracle (true R_w and k_s) beside it."""
+    (b) slip model ``slip``, with the oracle (true R_w and k_s) beside it."""
     plt = _pyplot()
     k_cut = int(np.searchsorted(rec.t_s, cut_s))
     fig, axes = plt.subplots(1, 2, figsize=(13, 6))
     panels = (("(a) slip neglected (scheme 3)", ("scheme3",)),
-              ("(b) slip modelled (scheme 4) and oracle", ("scheme4", "oracle")))
+              (f"(b) slip modelled ({slip}) and oracle", (slip, "oracle")))
     for ax, (title, names) in zip(axes, panels, strict=True):
         _reference(ax, rec.path)
         ax.plot(rec.truth[:, 0], rec.truth[:, 1], color="k", lw=1.6, label="true path")
@@ -79,10 +82,11 @@ def plot_dropout(rec, runs: dict, out_png: str | FsPath, cut_s: float) -> FsPath
     return _save(fig, out_png)
 
 
-def plot_autocorrelation(rho: dict, out_png: str | FsPath) -> FsPath:
-    """Fig. 6: ρ̄(l) of the odometric innovations (Eq. 42) with the ±1.96/√K interval."""
+def plot_autocorrelation(rho: dict, out_png: str | FsPath, slip: str = "scheme4") -> FsPath:
+    """Fig. 6: ρ̄(l) of the odometric innovations (Eq. 42) with the ±1.96/√K interval, for
+    scheme 3 and the slip model ``slip``."""
     plt = _pyplot()
-    names = [n for n in ("scheme3", "scheme4") if n in rho]
+    names = [n for n in ("scheme3", slip) if n in rho]
     fig, axes = plt.subplots(len(names), 1, figsize=(9, 3.2 * len(names)), sharex=True)
     for ax, name, tag in zip(np.atleast_1d(axes), names, "ab", strict=False):
         lags, r, bound = rho[name]

@@ -55,8 +55,11 @@ class Recording:
     beacons_xy : np.ndarray, shape (n_beacons, 2)
         Beacon positions [m].
     no_slip_radius_m : float or None
-        The effective radius the no-slip schemes (2, 3) are given [m], measured on a straight
-        drive (:mod:`.calibration`); None: the geometry's nominal (concrete) radius.
+        One effective radius for both wheels [m], measured on a straight drive
+        (:mod:`.calibration`); None: the geometry's nominal (concrete) radius.
+    no_slip_radii_m : tuple of float or None
+        Each side's effective radius (left, right) [m], measured on the same drive: what the
+        no-slip schemes (2, 3) are given; None: the geometry's nominal (concrete) radius.
     k_s_secant_nm : float or None
         The secant torque/slip gradient measured on that drive [N m] (for the secant oracle
         variant); None without a calibration.
@@ -72,6 +75,7 @@ class Recording:
     geometry: OdometryGeometry
     beacons_xy: np.ndarray
     no_slip_radius_m: float | None = None
+    no_slip_radii_m: tuple[float, float] | None = None
     k_s_secant_nm: float | None = None
 
 
@@ -123,7 +127,7 @@ def record(path: Path, seed: int, progress: bool = False, setting: Setting = HEA
     """Drive ``path`` once in FarmField-v0 (steered on scheme 1) and record every frame.
 
     ``setting`` picks the world's force law and the filters' parameters; ``calibration``
-    (:func:`~.calibration.calibrate`) gives the no-slip schemes their measured radius and
+    (:func:`~.calibration.calibrate`) gives the no-slip schemes their measured radii and
     the secant oracle its k_s (see :class:`Recording`).
     """
     limit_s = path.duration_s + 20.0
@@ -150,4 +154,6 @@ def record(path: Path, seed: int, progress: bool = False, setting: Setting = HEA
             params=LindgrenNoise(k_s0=default_k_s_prior(spec), **setting.noise),
             geometry=odometry_geometry(spec), beacons_xy=beacons_xy,
             no_slip_radius_m=None if calibration is None else calibration["radius_m"],
+            no_slip_radii_m=(None if calibration is None
+                             else tuple(calibration["radius_per_side_m"])),
             k_s_secant_nm=None if calibration is None else calibration["k_s_secant_nm"])

@@ -124,11 +124,17 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_reina", json_path: s
                                    <= TARGETS["slip_angle_rms_deg_max"] for t in TESTS},
         "slip_ratio_rms_le_0.12": {t: metrics["slip_ratio_rms"][t]
                                    <= TARGETS["slip_ratio_rms_max"] for t in TESTS},
-        "ftrace_false_positive_lt_0.5pct":
-            ftrace["false_positive"] < TARGETS["false_positive_max"],
-        "ftrace_false_negative_lt_3pct": ftrace["false_negative"] < TARGETS["false_negative_max"],
-        "ftrace_misidentification_lt_1pct":
-            ftrace["misidentification"] < TARGETS["misidentification_max"],
+        # FTrace's rates judged per test, as every other target (the mounds' overlapping ruts
+        # are the hard case; pooled with the sideways climb they would hide).
+        "ftrace_false_positive_lt_0.5pct": {
+            t: details["ftrace_by_test"][t]["false_positive"] < TARGETS["false_positive_max"]
+            for t in TESTS},
+        "ftrace_false_negative_lt_3pct": {
+            t: details["ftrace_by_test"][t]["false_negative"] < TARGETS["false_negative_max"]
+            for t in TESTS},
+        "ftrace_misidentification_lt_1pct": {
+            t: details["ftrace_by_test"][t]["misidentification"]
+            < TARGETS["misidentification_max"] for t in TESTS},
         "ftrace_frames_ge_1000": ftrace["frames"] >= TARGETS["frames_min"],
     }
     metrics["run_time_s"] = time.perf_counter() - t0

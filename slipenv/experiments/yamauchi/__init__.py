@@ -6,21 +6,20 @@ when rotating on a loose weak slope": track slip kinematics (Eq. 1-7), Endo's sl
 relation (Eq. 8), a slip-angle regression on roll, angular displacement and rotation radius
 (Eq. 9) and a path-following law with slip-angle feed-forward (§3, Eq. 9-10).
 
-By default the Wong-Chiang track model (``tracked_patako_wong_chiang``) on a loose
-dry sand (``dry_sand``) repeats the paper's rotation runs
+By default the Wong-Chiang track model (``tracked_patako_wong_chiang``) on the paper's loose,
+cohesionless Toyoura sand (``toyoura_sand``), the world of ``slipenv/TrackedSlopeCircle-v0``,
+repeats the paper's rotation runs
 (:mod:`.rotation`), identifies Endo's n and Eq. 9 from them (:mod:`.slips`), replays the
 odometries on held-out runs (:mod:`.odometry`) and drives the 15° circle with both laws
 (:mod:`.circle`), each episode one :func:`slipenv.rollout.rollout`. The paper's numbers are in
-:mod:`.paper`, the run plan in :mod:`.settings`. :func:`run` (:mod:`.experiment`) prints the
-paper-vs-simulation table (:mod:`.report`), saves the figures (:mod:`.plots`), the JSON and,
-with ``docs_dir``, the results page (:mod:`.docs`, ``docs/reproductions/yamauchi.md``), where
-the measured numbers, the departure from the paper and what limits the result are discussed.
-The fitted model the tracked env observes with is version-controlled data
-(:mod:`.model_file`), fitted in the env preset's world: ``Settings(vehicle=None, soil=None)``
-or on the command line ``slipenv reproduce yamauchi --vehicle tracked_patako --soil
-toyoura_sand`` (the per-wheel track law on ``toyoura_sand``, page ``DIR/yamauchi.md``); the
-default world's page is ``DIR/yamauchi_wong_chiang.md`` (plans :data:`.settings.FULL` and
-:data:`.settings.QUICK`).
+:mod:`.paper`, the run plan and what was calibrated on which measurement in :mod:`.settings`.
+:func:`run` (:mod:`.experiment`) prints the paper-vs-simulation table (:mod:`.report`), saves
+the figures (:mod:`.plots`), the JSON and, with ``docs_dir``, the results page (:mod:`.docs`,
+``docs/reproductions/yamauchi.md``), where the measured numbers, the departure from the paper
+and what limits the result are discussed. The fitted model the tracked env observes with is
+version-controlled data (:mod:`.model_file`), fitted in that default world. Other worlds
+(``--vehicle tracked_patako``, the per-wheel track law; ``--soil dry_sand``) write their own
+pages (``DIR/yamauchi_per_wheel.md``, ``DIR/yamauchi_<world>.md``).
 """
 
 from .circle import LimitObservation, circle_episode, mean_episodes

@@ -71,28 +71,6 @@ EXTRAPOLATION = """\
   beyond the training rotations' {rotation:g}°.
 """
 
-LIMITS = LIMITS_HEAD + """
-- **Odometry.** Even the true β leaves the slip-compensated odometry at {true_beta_ratio:.2f}
-  of gyrodometry (the fitted Eq. 9: {fitted_ratio:.2f}; the paper: 0.18, target ≤ 0.4).
-  Heading downhill the turning vehicle runs ahead of both tracks (the turn uses up the soil's
-  shear, so little is left to hold the vehicle back), a slip common to both tracks that Endo's
-  relation, a ratio of the two tracks' slips, cannot express. Endo's n also depends on whether
-  the vehicle turns uphill or downhill: fitted per direction it is {n_by_direction}.
-- **Circle.** On the odometry with the true β the feed-forward changes the mean error by a
-  factor {true_beta_ff:.2f} against feedback, and steered on the truth with the gains tuned on
-  rigid ground by {truth_ff:.2f} (the target asks ≤ 0.5; halving it needs stiffer gains): the
-  true slip angle of the turning vehicle swings by {swing:.0f}° (5-95 % range) around a lap,
-  faster than the law follows.
-""" + EXTRAPOLATION + """
-These limits trace to the per-wheel track law (slip states with no shear build-up along the
-track, no bulldozing resistance), which is why the reproduction runs on the Wong-Chiang track
-model on a loose dry sand by default
-([yamauchi_wong_chiang.md](yamauchi_wong_chiang.md)); this page is the env preset's world,
-`--vehicle tracked_patako --soil toyoura_sand`.
-"""
-"""The limits of the env preset's world (per-wheel track law, `toyoura_sand`): its mechanism
-sentences were measured in that world."""
-
 LIMITS_MEASURED = LIMITS_HEAD + """
 - **Endo's n.** Eq. 8 has one n per tilt for both turning directions. Fitted per direction
   (counter-clockwise turns the nose uphill, clockwise downhill) it is {n_by_direction}: on a
@@ -106,14 +84,20 @@ LIMITS_MEASURED = LIMITS_HEAD + """
   rigid ground by {truth_ff:.2f} (the target asks ≤ 0.5); the true slip angle of the turning
   vehicle swings by {swing:.0f}° (5-95 % range) around a lap.
 """ + EXTRAPOLATION + """
-The per-wheel law on `toyoura_sand` (the env preset's world) and the mechanisms measured there
-are discussed in [yamauchi.md](yamauchi.md).
 """
-"""The limits of any other world: only what this run's numbers say."""
+"""The limits of a run: only what its numbers say."""
+
+CALIBRATION_HEAD = """\
+## What was calibrated, on which measurement
+
+Parameters no source fixes were set from the paper's measured inputs and then frozen
+(`metrics.calibrated`); the odometry improvement (82 %) and the circle (9.1 -> 1.3 cm) are
+validation only, never fitted or used to choose:
+
+"""
 
 DEFAULT_WORLD = """\
-The `tracked_patako` vehicle on `toyoura_sand`, Janosi shear injected under each road wheel
-(`slipenv/TrackedSlopeCircle-v0`),"""
+The `tracked_patako_wong_chiang` vehicle on `toyoura_sand` (`slipenv/TrackedSlopeCircle-v0`)"""
 
 VEHICLE_MODELS = {
     "tracked_patako": "Janosi shear injected under each road wheel",
@@ -127,9 +111,11 @@ VEHICLE_MODELS = {
 """One sentence on each tracked vehicle's soil model (per-wheel law or Wong-Chiang track)."""
 
 SOIL_NOTES = {
-    "dry_sand": ("Wong's dry sand (LLL), a dry loose silica sand standing in for the paper's "
-                 "loosely poured Toyoura sand"),
-    "toyoura_sand": "the LETE constants standing in for the paper's Toyoura sand",
+    "dry_sand": "Wong's dry sand (LLL), cohesive (c = 1.04 kPa)",
+    "toyoura_sand": ("the paper's loosely poured Toyoura sand: cohesionless, φ and K from the "
+                     "Tohoku group's Toyoura set (Ishigami), the Bekker constants of the "
+                     "closest sourced dry loose silica sand, Wong's LLL dry sand "
+                     "(`slipenv/terramechanics/presets.py` gives each source)"),
 }
 
 
@@ -154,15 +140,12 @@ def world_text(vehicle: str | None, soil: str | None) -> str:
 
 
 def world_details(vehicle: str | None, soil: str | None) -> str:
-    """The world of a run outside the env preset's: its vehicle's soil model and its soil's
-    constants, one bullet each ("" for the preset's world, which the setup describes)."""
+    """The world of a run: its vehicle's soil model and its soil's constants, one bullet
+    each."""
     v, s = world_of(vehicle, soil)
-    if (v, s) == (DEFAULT_VEHICLE, DEFAULT_SOIL):
-        return ""
     model = VEHICLE_MODELS.get(v)
-    opening = ("The reproduction's default world; the same experiments in the env "
-               "preset's world (per-wheel law on `toyoura_sand`) are on "
-               "[yamauchi.md](yamauchi.md)" if (v, s) == (REPRODUCTION_VEHICLE, REPRODUCTION_SOIL)
+    opening = ("The env preset's world, the reproduction's default"
+               if (v, s) == (REPRODUCTION_VEHICLE, REPRODUCTION_SOIL)
                else "The same experiments as [yamauchi.md](yamauchi.md), with the world changed")
     return (f"{opening}:\n\n"
             f"- vehicle `{v}`{': ' + model if model else ''};\n- {soil_sentence(s)}.")
@@ -224,7 +207,9 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
         markdown_table(("quantity", "paper", "simulation"), markdown_rows(result)),
         f"Targets (the paper's odometry and circle results, and Endo's n): {met} of "
         f"{len(m['targets_met'])} met.",
-        (LIMITS if default else LIMITS_MEASURED).format(**values),
+        LIMITS_MEASURED.format(**values),
+        CALIBRATION_HEAD + "\n".join(f"- **{k}**: {v}." for k, v in
+                                      (m.get("calibrated") or {}).items()),
         "## Figures", figure_list(figures, CAPTIONS),
     ]
     return "\n\n".join(p.strip() for p in parts if p)

@@ -37,8 +37,9 @@ def test_finds_a_trace_of_known_angle_within_one_degree(beta_deg: float, seed: i
     det = FTrace(CONFIG.nominal_camera()).update(frame.image)
     assert det.status == "detected"
     assert math.degrees(det.angle_rad) == pytest.approx(beta_deg, abs=1.0)
-    # a straight trace has no bend: the near-field angle is the line's
-    assert math.degrees(det.near_angle_rad) == pytest.approx(beta_deg, abs=1.0)
+    # a straight trace has no bend: the near-field angle is the line's (both seen through the
+    # same miscalibrated mount, up to 0.75° of yaw, which the line's 1° above already holds)
+    assert math.degrees(det.near_angle_rad - det.angle_rad) == pytest.approx(0.0, abs=0.5)
     assert det.slip_angle_rad == pytest.approx(det.near_angle_rad)  # straight path: β = θ_t
 
 
@@ -131,6 +132,9 @@ def test_score_counts_each_outcome_by_its_definition() -> None:
     assert (score.frames, score.false_positive, score.false_negative,
             score.misidentification, score.max_consecutive_misses) == (5, 1, 2, 1, 2)
     assert score.rate("false_negative") == pytest.approx(0.4)
+    assert score.as_dict()["confusion"] == {
+        "trace_present": {"correct": 1, "misidentified": 1, "not_detected": 2},
+        "no_trace": {"detected": 1, "not_detected": 0}}
 
 
 def test_slip_angle_adds_the_turn_term_of_eq2() -> None:
