@@ -49,7 +49,7 @@ from stable_baselines3.common.logger import configure
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
 from slipenv.controllers.baseline import baseline_controller
-from slipenv.envs.compiled import warm_up
+from slipenv.envs.compiled import kernels_used, warm_up
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.rollout import TrajectoryRecorder, rollout
 
@@ -282,7 +282,12 @@ def train(env_id: str, algo: str = "ppo", total_timesteps: int | None = None, se
                       f"them and train slower than n_envs={cores}", stacklevel=2)
     vec_cls = SubprocVecEnv if config.n_envs > 1 else DummyVecEnv
     if config.n_envs > 1:
-        warm_up()  # the compiled kernels built once here, not by every worker on a cold cache
+        # the kernels this env uses compiled once here, not by every worker on a cold cache
+        probe = env_fn()
+        try:
+            warm_up(kernels_used(probe))
+        finally:
+            probe.close()
     vec = make_vec_env(_IgnoringSigint(env_fn) if config.n_envs > 1 else env_fn,
                        n_envs=config.n_envs, seed=config.seed, vec_env_cls=vec_cls)
     interrupted = False

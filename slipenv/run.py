@@ -128,17 +128,15 @@ def run_episode(env_id: str, seed: int = 0, controller: str = "yamauchi",
 
             base = env.unwrapped
             assert isinstance(base, SlipEnv)  # baseline_controller has checked it
-            compiled = [name for name, used in (
-                ("the Lindgren EKF", "lindgren" in base.config.estimator),
-                ("the track model", base.vehicle.track_model == "wong_chiang")) if used]
+            from slipenv.envs.compiled import KERNELS, kernels_used, warm_up
+
+            compiled = kernels_used(env)
             if compiled:
                 # Otherwise the first step stalls silently while numba compiles them.
-                from slipenv.envs.compiled import warm_up
-
-                print(f"preparing {' and '.join(compiled)} (numba compiles on the first run "
-                      "after an install, 15-30 s; later runs load from the cache)",
-                      file=sys.stderr, flush=True)
-                warm_up()
+                print(f"preparing {' and '.join(KERNELS[k] for k in compiled)} (numba compiles "
+                      "on the first run after an install, 15-30 s; later runs load from the "
+                      "cache)", file=sys.stderr, flush=True)
+                warm_up(compiled)
             limit = None if env.spec is None else env.spec.max_episode_steps
             total = max_steps or limit or base.max_steps
             bar = tqdm(total=total, desc=env_id, unit="step", leave=False)
