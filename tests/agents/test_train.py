@@ -335,7 +335,8 @@ def test_a_terminals_ctrl_c_reaching_the_workers_too_still_saves_the_model(tmp_p
             break  # one update done: the workers are stepping
         time.sleep(0.5)
     os.killpg(proc.pid, signal.SIGINT)  # what a terminal does: every process of the group
-    output, _ = proc.communicate(timeout=120)
+    # generous: saving the model and closing the workers share two cores with the other tests
+    output, _ = proc.communicate(timeout=300)
     assert proc.returncode == 130, output[-2000:]
     assert output.strip() == "interrupted"  # no worker tracebacks
     assert (out / "interrupted.zip").is_file()
