@@ -529,11 +529,9 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
             **({"named_cause": {**mine.as_dict(), "transfers": mine.passes(MIN_GAIN, MIN_DRIFT)}}
                if mine is not None else {})}
     # (mine is None only when nothing was named)
-    replace = best is not None and (current is None or geometric_current or mine is None
-                                    or not mine.passes(MIN_GAIN, MIN_DRIFT)
-                                    or best.after.sum() <= mine.after.sum())
-    if replace:
-        assert best is not None
+    if best is not None and (current is None or geometric_current or mine is None
+                             or not mine.passes(MIN_GAIN, MIN_DRIFT)
+                             or best.after.sum() <= mine.after.sum()):
         effects = _geometric_order(best.effects, current.effects if current else ())
         cand = cross_validate(problem, effects, folds)
         _judge(problem, cand, baseline.errors)
