@@ -21,6 +21,16 @@ the odometers cannot tell a curvature from a radius, and the unconstrained filte
 b < 0 with a radius off by centimetres. :func:`constrain_shape` keeps the constraint after
 every update (see there and :func:`clamp_nonnegative` for how, and why not b = exp(c)).
 
+The soil states must also carry the measured torques inside the small-slip model: an update
+that would take them out (a bearing can move k_s through its correlation with the position)
+is not applied (:func:`update_into`), and a soil estimate found outside is clipped to its
+boundary before the odometer update (:func:`constrain_slip`). The odometers are skipped only
+for a wheel that spins or locks by its own counts, judged with the state's uncertainty
+(:func:`wheels_slip_beyond`). Measured on the reproduction's drives: a check of the slip the
+soil estimate gives the torque rejected every later odometer reading once k_s had dropped at
+the end of a turn, so the soil estimate could never be corrected again, and after the laser
+cut the filter ran on its process model alone (single drives ended 40 m to 1 km off).
+
 ``NUMBA_DISABLE_JIT=1`` runs all of it as plain Python (slow, for debugging).
 """
 
@@ -35,14 +45,15 @@ from .models import (
     G_MPS2,
     IBL,
     IBR,
+    IKL,
     IKR,
     IRL,
     ITH,
     N_OKELLO,
     N_SLIP,
-    process_F,
+    process_F_into,
     process_fx,
-    process_Q,
+    process_Q_into,
     soil_size,
     wrap,
 )
@@ -55,6 +66,9 @@ from .observations import (
     odo_hx,
     odo_slip_H,
     odo_slip_hx,
+    okello_slip_factor_inverse,
+    slip_law,
+    slip_params,
     tilt_H,
     tilt_hx,
     wheel_slip,
@@ -83,26 +97,55 @@ OUT_GYRO, OUT_ACC, OUT_TILT, OUT_ODO, N_OUT_FIXED = 0, 2, 8, 14, 20
 def predict(x: np.ndarray, P: np.ndarray, tau: float, cfg: np.ndarray) -> None:
     """Propagate ``x`` and ``P`` in place over τ (Lindgren Eq. 6-7): ``x ← f(x)`` (θ wrapped),
     ``P ← F P F' + Q`` with f, F and Q of :mod:`.models`."""
-    F = process_F(x, tau)
-    Q = process_Q(x, tau, cfg[C_JERK_V], cfg[C_JERK_W], cfg[C_TILT_PSD], cfg[C_RADIUS_VAR],
-                  cfg[C_KS_VAR], cfg[C_B_VAR], cfg[C_KBETA_VAR])
+    n = x.shape[0]
+    predict_into(x, P, tau, cfg, np.empty(work_size(n)), np.empty(iwork_size(n), np.int64))
+
+
+@njit(cache=True)
+def work_size(n: int) -> int:
+    """Length of the float workspace of :func:`predict_into` and :func:`update_into`."""
+    return 4 * n * n + 3 * n + 8
+
+
+@njit(cache=True)
+def iwork_size(n: int) -> int:
+    """Length of the integer workspace of :func:`predict_into`."""
+    return n * n + n
+
+
+@njit(cache=True)
+def predict_into(x: np.ndarray, P: np.ndarray, tau: float, cfg: np.ndarray, work: np.ndarray,
+                 iwork: np.ndarray) -> None:
+    """:func:`predict` with its temporaries in the workspaces ``work`` (:func:`work_size`) and
+    ``iwork`` (:func:`iwork_size`): a frame predicts about three times, and allocating its
+    arrays each time cost as much as the arithmetic."""
+    n = x.shape[0]
+    nn = n * n
+    F = work[:nn].reshape((n, n))
+    Q = work[nn:2 * nn].reshape((n, n))
+    FP = work[2 * nn:3 * nn].reshape((n, n))
+    vals = work[3 * nn:4 * nn].reshape((n, n))
+    cols = iwork[:nn].reshape((n, n))
+    cnt = iwork[nn:nn + n]
+    process_F_into(x, tau, F)
+    process_Q_into(x, tau, cfg[C_JERK_V], cfg[C_JERK_W], cfg[C_TILT_PSD], cfg[C_RADIUS_VAR],
+                   cfg[C_KS_VAR], cfg[C_B_VAR], cfg[C_KBETA_VAR], Q)
     xp = process_fx(x, tau)
     xp[ITH] = wrap(xp[ITH])
-    n = x.shape[0]
     for i in range(n):
         x[i] = xp[i]
     # F is mostly the identity: list each row's non-zero entries once, then both products
     # visit only those (~35 of 169)
-    cols = np.empty((n, n), dtype=np.int64)
-    vals = np.empty((n, n))
-    cnt = np.zeros(n, dtype=np.int64)
+    for i in range(n):
+        cnt[i] = 0
+        for j in range(n):
+            FP[i, j] = 0.0
     for i in range(n):
         for k in range(n):
             if F[i, k] != 0.0:
                 cols[i, cnt[i]] = k
                 vals[i, cnt[i]] = F[i, k]
                 cnt[i] += 1
-    FP = np.zeros((n, n))
     for i in range(n):
         for t in range(cnt[i]):
             k, f = cols[i, t], vals[i, t]
@@ -128,15 +171,42 @@ def update(x: np.ndarray, P: np.ndarray, y: np.ndarray, H: np.ndarray, R: np.nda
     the updated state would have an entry <= 0 from index ``soil_from`` to ``IKR`` (R_w, k_s).
     ``S`` (flattened) goes into ``S_out`` in every case.
     """
+    n = x.shape[0]
+    return update_into(x, P, y, H, R, gate, soil_from, S_out, np.empty(work_size(n)),
+                       np.full(2, math.nan), np.zeros(0), math.inf)
+
+
+@njit(cache=True)
+def update_into(x: np.ndarray, P: np.ndarray, y: np.ndarray, H: np.ndarray, R: np.ndarray,
+                gate: float, soil_from: int, S_out: np.ndarray, work: np.ndarray,
+                torque: np.ndarray, soil: np.ndarray, max_slip: float) -> int:
+    """:func:`update` with its temporaries in the workspace ``work`` (:func:`work_size`, at
+    most two measurements), as :func:`predict_into`; with ``soil_from >= 0`` it also keeps
+    the soil estimate in the slip model's domain for the measured ``torque`` (NaN: none):
+    an update that would leave it a slip (:func:`soil_slip_extent`) above ``max_slip``, or
+    above what it had if that was more, changes nothing and returns :data:`INVALID_SOIL`.
+
+    Why the filter asks this of bearings too, not only of odometers: a bearing, through the
+    soil states' correlation with the position, can move k_s as far as an odometer can, and
+    did in the reproduction's drives. A soil estimate that gives the torque a slip beyond the
+    model's range (k_s below |T| / ``max_slip``, or T beyond Okello's T_max) makes the
+    odometers' model useless exactly where they are the only sensors that can correct it.
+    """
     n, nz = x.shape[0], y.shape[0]
-    PHt = np.zeros((n, nz))
+    PHt = work[:n * nz].reshape((n, nz))
+    for i in range(n):
+        for a in range(nz):
+            PHt[i, a] = 0.0
     for a in range(nz):
         for k in range(n):
             h = H[a, k]
             if h != 0.0:
                 for i in range(n):
                     PHt[i, a] += P[i, k] * h
-    S = R.copy()
+    S = work[n * nz:n * nz + nz * nz].reshape((nz, nz))
+    for a in range(nz):
+        for b in range(nz):
+            S[a, b] = R[a, b]
     for a in range(nz):
         for b in range(nz):
             for k in range(n):
@@ -157,7 +227,9 @@ def update(x: np.ndarray, P: np.ndarray, y: np.ndarray, H: np.ndarray, R: np.nda
             for k in range(b):
                 s -= L[a, k] * L[b, k]
             L[a, b] = math.sqrt(s) if a == b else s / L[b, b]
-    u = y.copy()  # L u = y, in place
+    u = work[n * nz + nz * nz:n * nz + nz * nz + nz]  # L u = y, in place
+    for a in range(nz):
+        u[a] = y[a]
     for a in range(nz):
         s = u[a]
         for k in range(a):
@@ -174,16 +246,26 @@ def update(x: np.ndarray, P: np.ndarray, y: np.ndarray, H: np.ndarray, R: np.nda
         for k in range(a + 1, nz):
             s -= L[k, a] * w[k]
         w[a] = s / L[a, a]
-    if soil_from >= 0:  # the soil states must stay positive: check before changing anything
-        for i in range(soil_from, IKR + 1):
+    if soil_from >= 0:  # the soil must stay in its domain: check before changing anything
+        base = n * nz + nz * nz + nz
+        cand = work[base:base + n]
+        for i in range(n):
             xi = x[i]
             for a in range(nz):
                 xi += PHt[i, a] * w[a]
-            if not xi > 0.0:
+            cand[i] = xi
+        for i in range(soil_from, IKR + 1):
+            if not cand[i] > 0.0:
                 return INVALID_SOIL
-    for i in range(n):
-        for a in range(nz):
-            x[i] += PHt[i, a] * w[a]
+        after = soil_slip_extent(cand, torque, soil)
+        if not (after <= max_slip or after <= soil_slip_extent(x, torque, soil)):
+            return INVALID_SOIL
+        for i in range(n):
+            x[i] = cand[i]
+    else:
+        for i in range(n):
+            for a in range(nz):
+                x[i] += PHt[i, a] * w[a]
     x[ITH] = wrap(x[ITH])
     A = PHt  # A = P H' L⁻ᵀ in place, row by row: L Aᵢ' = (P H')ᵢ'
     for i in range(n):
@@ -200,6 +282,67 @@ def update(x: np.ndarray, P: np.ndarray, y: np.ndarray, H: np.ndarray, R: np.nda
             P[i, j] = d
             P[j, i] = d
     return ACCEPTED
+
+
+SLIP_GATE_SIGMAS = 3.0  # the wheels' ground speed interval of the slip range check (99.7 %)
+
+
+@njit(cache=True)
+def wheels_slip_beyond(x: np.ndarray, P: np.ndarray, tau: float, dcount_l: float,
+                       dcount_r: float, track_width_m: float, counts_per_rad: float,
+                       soil: np.ndarray, max_slip: float) -> bool:
+    """True when a wheel's counts over the interval show a slip of ``max_slip`` or more for
+    every ground speed within :data:`SLIP_GATE_SIGMAS` standard deviations of the state's:
+    a wheel that spins or locks, outside the small-slip model (Lindgren Eq. 24).
+
+    Slip is ``1 - z₀ / c`` for c counts where rolling without slip gives z₀ (Eq. 15 with the
+    wheel's radius, Lindgren Eq. 32's ground speed over rim speed); one count of quantisation
+    is allowed. Why by the counts and the state's uncertainty: the slip the soil estimate
+    gives the measured torque, or the counts against the state's speed alone, both decide
+    with what the odometers are there to correct. A soil estimate or a yaw rate gone wrong
+    (the state lagging the end of a turn, with no gyro) then rejects every later odometer
+    reading, and nothing corrects it again. Here the state's uncertainty grows while the
+    odometers are rejected, until they are taken again.
+    """
+    r_w, _ = slip_params(x, soil)
+    h0 = odo_hx(x, tau, 1.0, track_width_m, counts_per_rad)  # no-slip counts × R_w
+    H0 = odo_H(x, tau, 1.0, track_width_m, counts_per_rad)
+    n = x.shape[0]
+    for i in range(2):
+        c = dcount_l if i == 0 else dcount_r
+        var = 0.0
+        for j in range(n):
+            if H0[i, j] != 0.0:
+                for k in range(n):
+                    var += H0[i, j] * P[j, k] * H0[i, k]
+        z0 = h0[i] / r_w[i]
+        half = SLIP_GATE_SIGMAS * math.sqrt(max(var, 0.0)) / r_w[i]
+        off = max(z0 - half - c, c - z0 - half, 0.0)  # counts outside the no-slip interval
+        if off > max_slip * abs(c) + 1.0:
+            return True
+    return False
+
+
+@njit(cache=True)
+def soil_slip_extent(x: np.ndarray, torque: np.ndarray, soil: np.ndarray) -> float:
+    """The largest |slip| the state's soil gives the measured ``torque`` (:func:`wheel_slip`,
+    Lindgren Eq. 24, or Okello's curve): ``inf`` where a radius or k_s is not positive or the
+    torque reaches the curve's T_max, 0 without a torque reading."""
+    r_w, k_s = slip_params(x, soil)
+    for i in range(2):
+        if not (r_w[i] > 0.0 and k_s[i] > 0.0):
+            return math.inf
+    if not (math.isfinite(torque[0]) and math.isfinite(torque[1])):
+        return 0.0
+    okello = soil_size(x.shape[0]) == N_OKELLO
+    worst = 0.0
+    for i in range(2):  # |s| is even in the direction of travel: σ = 1
+        s = slip_law(abs(torque[i]) / k_s[i], k_s[i], x[IBL + i] if okello else 0.0,
+                     okello)[0]
+        if not math.isfinite(s):
+            return math.inf
+        worst = max(worst, abs(s))
+    return worst
 
 
 @njit(cache=True)
@@ -294,6 +437,36 @@ def constrain_shape(x: np.ndarray, P: np.ndarray) -> None:
 
 
 @njit(cache=True)
+def constrain_slip(x: np.ndarray, torque: np.ndarray, max_slip: float) -> None:
+    """Keep the soil states (13 or 15-state layouts) such that each wheel's measured torque
+    has a slip below ``max_slip`` (Lindgren Eq. 24, or Okello's curve), in place.
+
+    Called for a wheel whose counts show it rolls within that range
+    (:func:`wheels_slip_beyond`): a soil estimate that gives its torque a larger slip, or puts
+    it beyond Okello's T_max, is outside the small-slip model where the data are, and the
+    odometers' model of it is useless (at T_max its prediction has a pole). k_s is clipped to
+    at least |T| / ``max_slip``, then, for Okello's curve, 1/B to at most the value that gives
+    that slip; the odometer update then corrects them further. Clipped, not moved with the
+    other states to their conditional means as :func:`clamp_nonnegative` moves 1/B: at the
+    end of a turn that regression on a soil state swung v and Ω by metres per second
+    (measured on the reproduction's drives), the correlations there being the linearisation's.
+    """
+    okello = soil_size(x.shape[0]) == N_OKELLO
+    for i in range(2):
+        t = abs(torque[i])
+        if t == 0.0:
+            continue
+        ik = IKL + i
+        if not (x[ik] > 0.0 and t / x[ik] < max_slip):
+            x[ik] = t / max_slip
+        if not okello:
+            continue
+        s_lin = t / x[ik]
+        if not slip_law(s_lin, x[ik], x[IBL + i], True)[0] < max_slip:
+            x[IBL + i] = 2.0 * okello_slip_factor_inverse(max_slip / s_lin) / s_lin
+
+
+@njit(cache=True)
 def _pair(a: float, b: float) -> np.ndarray:
     v = np.empty(2)
     v[0], v[1] = a, b
@@ -319,10 +492,11 @@ def _record(out: np.ndarray, at: int, y: np.ndarray, S: np.ndarray) -> None:
 @njit(cache=True)
 def filter_frame(
     x: np.ndarray, P: np.ndarray, t_state: float, cfg: np.ndarray, soil: np.ndarray,
-    beacons_xy: np.ndarray, bearing_t: np.ndarray, bearing_z: np.ndarray, t: float,
-    inertial: bool, gyro_z: float, acc_x: float, acc_y: float, pitch: float, roll: float,
+    beacons_xy: np.ndarray, bearing_t: np.ndarray, bearing_z: np.ndarray, t_prev: float,
+    t: float, inertial: bool, gyro_z: float, acc_x: float, acc_y: float, pitch: float, roll: float,
     odo_mode: int, tau: float, dcount_l: float, dcount_r: float, torque_l: float,
-    torque_r: float, status: np.ndarray, out: np.ndarray,
+    torque_r: float, status: np.ndarray, out: np.ndarray, work: np.ndarray,
+    iwork: np.ndarray,
 ) -> float:
     """One frame in place on ``x`` and ``P``: each bearing at its own time (predict to it,
     nearest-innovation association, χ²-gated update, Lindgren Eq. 17), predict to ``t``, then
@@ -333,26 +507,43 @@ def filter_frame(
 
     ``status`` (m + 4,) receives a status code per bearing, then gyro, accelerometers,
     inclinometer, odometers; ``out`` (2 m + 20,) the innovation ``y`` and its ``S`` of each
-    accepted one (layout: ``OUT_*``). Returns the time the state now refers to [s].
+    accepted one (layout: ``OUT_*``). ``work`` and ``iwork`` are the workspaces of
+    :func:`predict_into` and :func:`update_into`. Returns the time the state now refers to [s].
+
+    The bearings must be finite, in time order, in the frame's interval ``(t_prev, t]``;
+    otherwise nothing is changed and the return value is NaN (the caller sorts and filters
+    them, or rejects the frame, and calls again). The check is here because a Python loop over
+    the bearings of every frame cost a tenth of the filter's step.
     """
     m = bearing_t.shape[0]
+    W, cpr, max_slip = cfg[C_TRACK], cfg[C_CPR], cfg[C_MAX_SLIP]
+    # the soil states, where the state has them, must stay in the model's domain
+    soil_from = IRL if soil_size(x.shape[0]) >= N_SLIP else -1
+    T = _pair(torque_l, torque_r)
+    last = t_prev
+    for j in range(m):
+        tb = bearing_t[j]
+        if not (tb > t_prev and tb >= last and tb <= t and math.isfinite(bearing_z[j])):
+            return math.nan
+        last = tb
     S1 = np.empty(1)
     y1 = np.empty(1)
     R1 = np.empty((1, 1))
     for j in range(m):
         if bearing_t[j] > t_state:
-            predict(x, P, bearing_t[j] - t_state, cfg)
+            predict_into(x, P, bearing_t[j] - t_state, cfg, work, iwork)
             t_state = bearing_t[j]
         if beacons_xy.shape[0] == 0:
             status[j] = NOT_MEASURED
             continue
         b, y1[0] = nearest_beacon(x, bearing_z[j], beacons_xy)
         R1[0, 0] = cfg[C_R_BEARING]
-        status[j] = update(x, P, y1, bearing_H(x, beacons_xy[b]), R1, cfg[C_GATE], -1, S1)
+        status[j] = update_into(x, P, y1, bearing_H(x, beacons_xy[b]), R1, cfg[C_GATE],
+                                soil_from, S1, work, T, soil, max_slip)
         constrain_shape(x, P)
         out[2 * j], out[2 * j + 1] = y1[0], S1[0]
     if t > t_state:
-        predict(x, P, t - t_state, cfg)
+        predict_into(x, P, t - t_state, cfg, work, iwork)
         t_state = t
     base = 2 * m
     S2 = np.empty(4)
@@ -362,45 +553,50 @@ def filter_frame(
         if math.isfinite(gyro_z):  # g1 = Ω
             y1[0] = gyro_z - ins_hx(x)[2]
             R1[0, 0] = cfg[C_R_GYRO]
-            status[m] = update(x, P, y1, ins_H(x)[2:3], R1, math.inf, -1, S1)
+            status[m] = update_into(x, P, y1, ins_H(x)[2:3], R1, math.inf, -1, S1, work, T,
+                                    soil, max_slip)
             constrain_shape(x, P)
             _record(out, base + OUT_GYRO, y1, S1)
         if math.isfinite(acc_x) and math.isfinite(acc_y):  # [a1/g, a2/g]
             h = ins_hx(x)
             y = _pair(acc_x / G_MPS2 - h[0], acc_y / G_MPS2 - h[1])
-            status[m + 1] = update(x, P, y, ins_H(x)[0:2], _diag2(cfg[C_R_AX], cfg[C_R_AY]),
-                                   math.inf, -1, S2)
+            status[m + 1] = update_into(x, P, y, ins_H(x)[0:2],
+                                        _diag2(cfg[C_R_AX], cfg[C_R_AY]), math.inf, -1, S2,
+                                        work, T, soil, max_slip)
             constrain_shape(x, P)
             _record(out, base + OUT_ACC, y, S2)
         if math.isfinite(pitch) and math.isfinite(roll):  # REP 103 -> Lindgren's α1, α2
             h = tilt_hx(x)
             y = _pair(-pitch - h[0], -roll - h[1])
-            status[m + 2] = update(x, P, y, tilt_H(x), _diag2(cfg[C_R_TILT], cfg[C_R_TILT]),
-                                   math.inf, -1, S2)
+            status[m + 2] = update_into(x, P, y, tilt_H(x),
+                                        _diag2(cfg[C_R_TILT], cfg[C_R_TILT]), math.inf, -1,
+                                        S2, work, T, soil, max_slip)
             constrain_shape(x, P)
             _record(out, base + OUT_TILT, y, S2)
     if odo_mode < 0:
         return t_state
-    W, cpr = cfg[C_TRACK], cfg[C_CPR]
     R_odo = _diag2(cfg[C_R_ODO], cfg[C_R_ODO])
     if odo_mode == 0:
         h = odo_hx(x, tau, cfg[C_RADIUS], W, cpr)
         H = odo_H(x, tau, cfg[C_RADIUS], W, cpr)
-        soil_from = -1
     else:
         if not (math.isfinite(torque_l) and math.isfinite(torque_r)):
             status[m + 3] = TORQUE_NAN
             return t_state
-        T = _pair(torque_l, torque_r)
-        s = wheel_slip(x, tau, T, W, soil)
-        if abs(s[0]) >= cfg[C_MAX_SLIP] or abs(s[1]) >= cfg[C_MAX_SLIP]:
+        if wheels_slip_beyond(x, P, tau, dcount_l, dcount_r, W, cpr, soil, max_slip):
             status[m + 3] = SLIP_OUT_OF_RANGE  # Eq. 24 is a small-slip model
+            return t_state
+        if soil_from >= 0:
+            constrain_slip(x, T, max_slip)
+        s = wheel_slip(x, tau, T, W, soil)
+        if not (abs(s[0]) < 1.0 and abs(s[1]) < 1.0):  # the model's pole: no prediction
+            status[m + 3] = SLIP_OUT_OF_RANGE
             return t_state
         h = odo_slip_hx(x, tau, T, W, cpr, soil)
         H = odo_slip_H(x, tau, T, W, cpr, soil)
-        soil_from = IRL if soil_size(x.shape[0]) >= N_SLIP else -1
     y = _pair(dcount_l - h[0], dcount_r - h[1])
-    status[m + 3] = update(x, P, y, H, R_odo, math.inf, soil_from, S2)
+    status[m + 3] = update_into(x, P, y, H, R_odo, math.inf, soil_from, S2, work, T, soil,
+                                max_slip)
     constrain_shape(x, P)
     _record(out, base + OUT_ODO, y, S2)
     return t_state

@@ -196,8 +196,20 @@ def process_fx(x: np.ndarray, tau: float) -> np.ndarray:
 @njit(cache=True)
 def process_F(x: np.ndarray, tau: float) -> np.ndarray:
     """Jacobian ``F = ∂f/∂x`` of :func:`process_fx` (Lindgren Eq. 7), shape (n, n)."""
+    F = np.empty((x.shape[0], x.shape[0]))
+    process_F_into(x, tau, F)
+    return F
+
+
+@njit(cache=True)
+def process_F_into(x: np.ndarray, tau: float, F: np.ndarray) -> None:
+    """:func:`process_F` written into ``F`` (n, n), for the filter's per-frame workspace: the
+    filter predicts a few times per frame, where allocating costs as much as the arithmetic."""
     n = x.shape[0]
-    F = np.eye(n)
+    for i in range(n):
+        for j in range(n):
+            F[i, j] = 0.0
+        F[i, i] = 1.0
     v_bar = x[IV] + 0.5 * tau * x[IVD]
     om_bar = x[IOM] + 0.5 * tau * x[IOMD]
     dth = tau * om_bar
@@ -251,7 +263,6 @@ def process_F(x: np.ndarray, tau: float) -> np.ndarray:
     F[IA1, IOMD] = 0.5 * tau * tau * da1
     F[IA2, IOM] = tau * da2
     F[IA2, IOMD] = 0.5 * tau * tau * da2
-    return F
 
 
 @njit(cache=True)
@@ -329,8 +340,31 @@ def process_Q(
     -------
     np.ndarray, shape (n, n)
     """
+    Q = np.empty((x.shape[0], x.shape[0]))
+    process_Q_into(x, tau, jerk_psd_v, jerk_psd_omega, tilt_psd, radius_var_per_m,
+                   k_s_rel_var_per_m, b_var_per_m, k_beta_var_per_m, Q)
+    return Q
+
+
+@njit(cache=True)
+def process_Q_into(
+    x: np.ndarray,
+    tau: float,
+    jerk_psd_v: float,
+    jerk_psd_omega: float,
+    tilt_psd: float,
+    radius_var_per_m: float,
+    k_s_rel_var_per_m: float,
+    b_var_per_m: float,
+    k_beta_var_per_m: float,
+    Q: np.ndarray,
+) -> None:
+    """:func:`process_Q` written into ``Q`` (n, n) (the filter's workspace, as
+    :func:`process_F_into`)."""
     n = x.shape[0]
-    Q = np.zeros((n, n))
+    for i in range(n):
+        for j in range(n):
+            Q[i, j] = 0.0
     v_bar = x[IV] + 0.5 * tau * x[IVD]
     th_mid = x[ITH] + 0.5 * tau * (x[IOM] + 0.5 * tau * x[IOMD])
     u = (math.cos(th_mid), math.sin(th_mid))
@@ -361,4 +395,3 @@ def process_Q(
         Q[IBL, IBL] = Q[IBR, IBR] = b_var_per_m * d
     if base != n:
         Q[n - 1, n - 1] = k_beta_var_per_m * d
-    return Q

@@ -263,6 +263,20 @@ def okello_slip_factor(u: float) -> tuple[float, float]:
 
 
 @njit(cache=True)
+def okello_slip_factor_inverse(r: float) -> float:
+    """u in [0, 1) with φ(u) = r >= 1 (:func:`okello_slip_factor`), by bisection, from below:
+    φ rises from 1 at u = 0 to ∞ as u → 1 (g⁻¹ is convex through 0, so g⁻¹(u) / u rises)."""
+    lo, hi = 0.0, 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if okello_slip_factor(mid)[0] < r:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True)
 def slip_model(x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: float,
                soil: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Slip of the (left, right) wheel from its torque, and its derivatives.
@@ -287,22 +301,27 @@ def slip_model(x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: flo
     okello = soil_size(x.shape[0]) == N_OKELLO
     s = np.empty(2)
     ds_dk = np.empty(2)
-    ds_db = np.zeros(2)
+    ds_db = np.empty(2)
     for i in range(2):
         s_lin = travel_sign(v_w[i]) * torque[i] / k_s[i]
-        if not okello:
-            s[i] = s_lin
-            ds_dk[i] = -s_lin / k_s[i]
-            continue
-        u = 0.5 * x[IBL + i] * abs(s_lin)
-        if u >= 1.0:
-            s[i], ds_dk[i] = math.inf, 0.0
-            continue
-        phi, dphi = okello_slip_factor(u)
-        s[i] = s_lin * phi
-        ds_dk[i] = -(s_lin / k_s[i]) * (phi + u * dphi)
-        ds_db[i] = s_lin * dphi * 0.5 * abs(s_lin)
+        s[i], ds_dk[i], ds_db[i] = slip_law(s_lin, k_s[i], x[IBL + i] if okello else 0.0,
+                                            okello)
     return s, ds_dk, ds_db
+
+
+@njit(cache=True)
+def slip_law(s_lin: float, k_s: float, b: float, okello: bool) -> tuple[float, float, float]:
+    """One wheel's slip ``s`` and its derivatives ∂s/∂k_s, ∂s/∂b from its linear-law slip
+    ``s_lin = σ T / k_s`` (Lindgren Eq. 24): ``s_lin`` itself, or with Okello's curve
+    (inverse shape ``b``) ``s_lin φ(b |s_lin| / 2)`` (:func:`slip_model`); ``inf`` (and zero
+    derivatives) where the torque reaches the curve's T_max."""
+    if not okello:
+        return s_lin, -s_lin / k_s, 0.0
+    u = 0.5 * b * abs(s_lin)
+    if u >= 1.0:
+        return math.inf, 0.0, 0.0
+    phi, dphi = okello_slip_factor(u)
+    return s_lin * phi, -(s_lin / k_s) * (phi + u * dphi), s_lin * dphi * 0.5 * abs(s_lin)
 
 
 @njit(cache=True)

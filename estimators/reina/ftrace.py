@@ -6,7 +6,9 @@ camera model → merged into rut edges → candidates (an edge with its opposite
 wheel width, or a lone edge) → fuzzy confidence (:mod:`.fuzzy`) → best candidate above the
 threshold → its straight line refined on the edge pixels within a narrow band of its walls
 (:func:`~.trace_lines.refine_angle`) and its rut edges followed along the
-ground (:func:`~.trace_lines.follow_trace`); otherwise the last trace is kept for at most
+ground (:func:`~.trace_lines.follow_trace`), once in that narrow band for the line of the
+whole visible trace and once in a wider one for the near field; a trace followed over less
+than ``min_trace_m`` is not reported; otherwise the last trace is kept for at most
 ``max_hold_frames`` frames (Reina §4.1: never more than 3 in a row) → slip angle (Eq. 1-2)
 from the trace near the wheel.
 
@@ -16,9 +18,11 @@ small" (§2.1), and θ_t of Eq. 1-2 is the angle of the rear wheel's velocity V_
 camera sees the last 0.6 m of trace, about 7 s of travel at 8 cm/s; on mounds the slip angle
 swings within that time and the visible trace bends. Two angles are therefore reported: the
 trace line (``angle_rad``: the least-squares line of the visible trace, Reina's straight-line
-model, which the continuity rule and the region of interest track) and the near-field angle
-(``near_angle_rad``: the trace line plus the bend, the near-field line over the last
-``near_field_m`` of trace minus the whole trace's line, averaged over a few frames), the
+model, which the continuity rule and the region of interest track; fitted to the walls
+followed along the bend, since a straight band keeps only the straightest piece of a bending
+rut and, where the rover crabs, the front wheel's older rut beside it) and the near-field angle
+(``near_angle_rad``: the straight-band line plus the bend, the near-field line over the last
+``near_field_m`` of trace minus the straight-band line, averaged over a few frames), the
 direction V_r had about 1.5 s ago, which gives the slip angle. On a straight trace the two
 agree.
 
@@ -38,6 +42,7 @@ from slipenv.contracts.camera import PinholeCamera
 
 from .fuzzy import FuzzyTraceRules
 from .trace_lines import (
+    TraceCurve,
     candidates_from_segments,
     edge_points_ground,
     follow_trace,
@@ -117,6 +122,11 @@ class FTraceConfig:
     refine_band_m : float
         Half width of the band around a candidate's edge lines whose edge pixels fit its line
         [m] (see :func:`.trace_lines.refine_angle`).
+    min_trace_m : float
+        Shortest stretch of trace, followed along the ground, reported as a detection [m]:
+        in the first seconds of a run the rut behind the wheel is shorter and gives no
+        direction (a Hough line of 40 px is 0.1 m). 0.15 m is the rear camera's own length for
+        a trace to be present (``TraceCameraConfig.min_visible_m``), set on Reina's test 1.
     rules : FuzzyTraceRules
         Memberships and rule outputs.
     """
@@ -138,6 +148,7 @@ class FTraceConfig:
     bend_smoothing_frames: float = 3.0
     max_bend_rad: float = math.radians(6.0)
     refine_band_m: float = 0.004
+    min_trace_m: float = 0.15
     rules: FuzzyTraceRules = field(default_factory=FuzzyTraceRules)
 
     def __post_init__(self) -> None:
@@ -147,7 +158,7 @@ class FTraceConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"FTraceConfig.{name} must be finite and > 0, got {value!r}")
-        for name in ("near_field_m", "bend_smoothing_frames"):
+        for name in ("near_field_m", "bend_smoothing_frames", "min_trace_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"FTraceConfig.{name} must be finite and >= 0, got {value!r}")
@@ -252,12 +263,17 @@ class FTrace:
                 self.last[0] if self.last else None, cands.pair_mismatch, cands.length)
             best = int(np.argmax(scores))
             conf = float(scores[best])
+        fit = None
         if best >= 0 and conf >= cfg.confidence_threshold:
-            angle, near = self._fit_curve(blurred, edges, cands.edge_lines[best],
-                                          float(cands.angle[best]))
-            self.bend_rad += (near - angle - self.bend_rad) / (1.0 + cfg.bend_smoothing_frames)
+            fit = self._fit_curve(blurred, edges, cands.edge_lines[best],
+                                  float(cands.angle[best]))
+            if fit[3] < cfg.min_trace_m:
+                fit = None
+        if fit is not None:
+            angle, straight, near, _ = fit
+            self.bend_rad += (near - straight - self.bend_rad) / (1.0 + cfg.bend_smoothing_frames)
             offset = float(cands.offset[best])
-            self.last = (angle, offset, angle + self.bend_rad)
+            self.last = (angle, offset, straight + self.bend_rad)
             self.held_frames, status = 0, "detected"
         elif self.last is not None and self.held_frames < cfg.max_hold_frames:
             self.held_frames += 1
@@ -272,19 +288,56 @@ class FTrace:
         return TraceDetection(status, angle, offset, conf, beta, len(cands.angle), near)
 
     def _fit_curve(self, image: np.ndarray, edges: np.ndarray, edge_lines: np.ndarray,
-                   angle_rad: float) -> tuple[float, float]:
-        """(line angle, near-field angle) of the candidate's trace."""
+                   angle_rad: float) -> tuple[float, float, float, float]:
+        """(line angle, straight-band line angle, near-field angle, length followed [m]) of
+        the candidate's trace; the length is infinite when the walls cannot be followed (the
+        straight-band line stands). The bend is measured from the straight-band line, whose
+        frame-to-frame noise the bend's filter was set against."""
         cfg = self.config
-        line = refine_angle(edges, self.camera, cfg.ground_z_m, edge_lines, angle_rad,
-                            cfg.refine_band_m)
+        straight = refine_angle(edges, self.camera, cfg.ground_z_m, edge_lines, angle_rad,
+                                cfg.refine_band_m)
         points, normals = edge_points_ground(edges, self.camera, cfg.ground_z_m, image)
+        walls = follow_trace(points, edge_lines, angle_rad, cfg.wheel_xy_m[0], normals,
+                             band_m=cfg.refine_band_m)
+        whole = self._whole_line(walls, len(np.reshape(edge_lines, (-1, 3))))
+        line = whole if math.isfinite(whole) and abs(whole - straight) < math.radians(4.0) \
+            else straight
+        length = math.inf if walls is None else walls.u_range[1] - walls.u_range[0]
         curve = follow_trace(points, edge_lines, angle_rad, cfg.wheel_xy_m[0], normals)
         if curve is None:
-            return line, line
+            return line, straight, straight, length
         near = curve.line_angle(cfg.near_field_m)
-        if not math.isfinite(near) or abs(near - line) > cfg.max_bend_rad:
-            return line, line
-        return line, near
+        if not math.isfinite(near) or abs(near - straight) > cfg.max_bend_rad:
+            return line, straight, straight, length
+        return line, straight, near, length
+
+    def _whole_line(self, walls: TraceCurve | None, n_walls: int) -> float:
+        """Least-squares line of the candidate's walls followed over the whole view [rad].
+
+        A bending trace leaves the straight band of :func:`.trace_lines.refine_angle` part of
+        the way along, and where the front wheel's rut runs beside the rear one the straight
+        band takes the older, straighter rut's wall instead. The walls followed as parallel
+        curves in the same narrow band keep to the rear rut along the bend; the line is
+        believed only when every wall is followed (the weakest with at least a third of the
+        pixels of the strongest: the rut's two walls are cut together, and a wall that fades
+        out part of the way has been left for another edge; set on Reina's test 1 and on
+        synthetic traces) from the wheel's end of the view (within one strip of it), else NaN.
+        """
+        if walls is None:
+            return math.nan
+        counts = np.bincount(walls.group, minlength=n_walls)
+        if 3 * counts.min() < counts.max():
+            return math.nan
+        if walls.u_range[1] < self._view_near_u() - 0.08:  # follow_trace's strip
+            return math.nan
+        return walls.line_angle()
+
+    def _view_near_u(self) -> float:
+        """Body x of the view's edge nearest the wheel, relative to the contact point [m]."""
+        rows, cols = self.camera.shape
+        corners = np.array([[0.0, 0.0], [cols, 0.0], [0.0, rows], [cols, rows]])
+        x = self.camera.image_to_ground(corners, self.config.ground_z_m)[:, 0]
+        return float(np.nanmax(x)) - self.config.wheel_xy_m[0]
 
     def _view_mid_x(self) -> float:
         rows, cols = self.camera.shape

@@ -46,6 +46,7 @@ import functools
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 _SEED_CELLS = 8  # cells per side of the coarse grid a new region is seeded from
 _SEEDS = 3  # best seed cells each descended from
@@ -291,56 +292,134 @@ def _scan(q: Quadratic, region: int, eligible: np.ndarray, key: np.ndarray, othe
     ``region`` (the others held as in ``others``): (cut, levels, cost), the cut halfway
     between two distinct keys and at least ``min_cut`` (None: past the last), or None when no
     cut leaves every level positive."""
-    gm, a0, h0 = others.gm, others.a, others.h
-    coord = key[eligible]
-    n = coord.size
-    if n == 0:
+    if not eligible.any():
         return None
-    order = np.argsort(coord, kind="stable")
-    where = np.nonzero(eligible)
-    rank = np.full(eligible.shape, -1)
-    rank[where[0][order], where[1][order]] = np.arange(n)
-    # the region's intervals after the first m+1 are added: every pair (i, j) of a segment
-    # counts from max(rank_i, rank_j) on
-    seg_ok = np.flatnonzero(eligible.any(axis=1))
-    r = rank[seg_ok]
-    pair = np.maximum(r[:, :, None], r[:, None, :])
-    both = (r[:, :, None] >= 0) & (r[:, None, :] >= 0)
-    added = np.cumsum(np.bincount(pair[both], weights=q.G[seg_ok][both], minlength=n))
-    grow_h = np.cumsum(q.b[eligible][order])
-    grow_a = np.cumsum(gm[:, eligible][:, order], axis=1).T  # (n, regions)
-    a = np.broadcast_to(a0, (n, *a0.shape)).copy()
-    a[:, region, :] += grow_a
-    a[:, :, region] += grow_a
-    a[:, region, region] += added  # (grow_a counted the region's own row twice: 2 M_f·G·add)
-    h = np.broadcast_to(h0, (n, len(h0))).copy()
-    h[:, region] += grow_h
-    c = -_solve_small(a + _ridge(np.mean(a, axis=0)) * np.eye(len(h0)), h)
-    cost = q.rr.sum() + np.einsum("nk,nk->n", h, c)
-    sorted_coord = coord[order]
-    # a cut falls between two distinct coordinates (or beyond the last) and not below
-    # min_cut: halfway (the widest margin), or min_cut when that falls within the gap
-    cuts = np.append(np.maximum(0.5 * (sorted_coord[:-1] + sorted_coord[1:]), min_cut), np.inf)
-    valid = np.all(c > 0, axis=1) & np.isfinite(cost) \
-        & np.append(sorted_coord[:-1] != sorted_coord[1:], True) \
-        & (np.append(sorted_coord[1:], np.inf) > min_cut)
-    if not np.any(valid):
+    found, cut, levels, cost = _scan_kernel(
+        q.G, q.b, float(q.rr.sum()), others.gm, others.a, others.h, region,
+        np.ascontiguousarray(eligible), np.ascontiguousarray(key, dtype=float), float(min_cut))
+    if found < 0:
         return None
-    m = int(np.argmin(np.where(valid, cost, np.inf)))
-    return (float(cuts[m]) if m + 1 < n else None), c[m], float(cost[m])
+    return (None if found == 0 else cut), levels, cost
 
 
-def _solve_small(a: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """x with a x = h for a stack of systems ``a`` (n, k, k), ``h`` (n, k); a singular one
-    gives non-finite x. One region (k = 1) is a division: what LAPACK's LU does for a 1×1
-    system, without the cost of a batched call."""
-    if h.shape[1] == 1:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return h / a[:, 0]
-    try:
-        return np.linalg.solve(a, h[..., None])[..., 0]
-    except np.linalg.LinAlgError:
-        return np.full(h.shape, np.nan)
+@njit(cache=True, error_model="numpy")
+def _scan_kernel(G, b, rr_sum, gm, a0, h0, region, eligible, key, min_cut):
+    """:func:`_scan`'s arithmetic, compiled (a search calls it ~10⁵ times). Returns (found,
+    cut, levels, cost): found -1 when no cut is valid, 0 for a cut past the last key, 1
+    otherwise.
+
+    The intervals join ``region`` in the order of their key; every pair (i, j) of a segment
+    counts in Uᵀ G U from the later of the two on, so A and h for every cut are cumulative
+    sums over that order, and each cut's levels solve a regions × regions system (module
+    doc)."""
+    n_seg, n_int = eligible.shape
+    n_reg = h0.size
+    seg_of = np.empty(n_seg * n_int, np.int64)
+    int_of = np.empty(n_seg * n_int, np.int64)
+    coord = np.empty(n_seg * n_int)
+    n = 0
+    for s in range(n_seg):
+        for j in range(n_int):
+            if eligible[s, j]:
+                seg_of[n], int_of[n], coord[n] = s, j, key[s, j]
+                n += 1
+    coord = coord[:n]
+    order = np.argsort(coord, kind="mergesort")  # stable: ties keep the data's order
+    rank = np.full((n_seg, n_int), -1, np.int64)
+    for m in range(n):
+        rank[seg_of[order[m]], int_of[order[m]]] = m
+    added = np.zeros(n)
+    for s in range(n_seg):
+        for i in range(n_int):
+            ri = rank[s, i]
+            if ri < 0:
+                continue
+            for j in range(n_int):
+                rj = rank[s, j]
+                if rj >= 0:
+                    added[max(ri, rj)] += G[s, i, j]
+    a = np.empty((n, n_reg, n_reg))
+    h = np.empty((n, n_reg))
+    grow_a = np.zeros(n_reg)
+    grow_h = 0.0
+    grow_g = 0.0
+    trace = 0.0
+    for m in range(n):
+        s, j = seg_of[order[m]], int_of[order[m]]
+        grow_h += b[s, j]
+        grow_g += added[m]
+        for r in range(n_reg):
+            grow_a[r] += gm[r, s, j]
+        for r in range(n_reg):
+            h[m, r] = h0[r]
+            for col in range(n_reg):
+                a[m, r, col] = a0[r, col]
+        h[m, region] += grow_h
+        for r in range(n_reg):
+            a[m, region, r] += grow_a[r]
+            a[m, r, region] += grow_a[r]
+        a[m, region, region] += grow_g  # grow_a counted the region's own row twice
+        for r in range(n_reg):
+            trace += a[m, r, r]
+    ridge = 1e-12 * max(trace / n / max(n_reg, 1), 1e-300)
+    best, best_cost = -1, np.inf
+    levels = np.empty((n, n_reg))
+    for m in range(n):
+        for r in range(n_reg):
+            a[m, r, r] += ridge
+        ok = _solve_small(a[m], h[m], levels[m])
+        cost = rr_sum
+        for r in range(n_reg):
+            levels[m, r] = -levels[m, r]
+            cost += h[m, r] * levels[m, r]
+            ok = ok and levels[m, r] > 0
+        last = m + 1 == n
+        # a cut falls between two distinct coordinates (or beyond the last) and not below
+        # min_cut: halfway (the widest margin), or min_cut when that falls within the gap
+        ok = ok and np.isfinite(cost) and (last or coord[order[m]] != coord[order[m + 1]]) \
+            and (last or coord[order[m + 1]] > min_cut)
+        if ok and cost < best_cost:
+            best, best_cost = m, cost
+    if best < 0:
+        return -1, 0.0, np.zeros(n_reg), 0.0
+    if best + 1 == n:
+        return 0, np.inf, levels[best].copy(), best_cost
+    cut = max(0.5 * (coord[order[best]] + coord[order[best + 1]]), min_cut)
+    return 1, cut, levels[best].copy(), best_cost
+
+
+@njit(cache=True, error_model="numpy")
+def _solve_small(a, h, out):
+    """x with a x = h into ``out`` by Gaussian elimination with partial pivoting (a regions ×
+    regions system, one per cut); False when ``a`` is singular."""
+    k = h.size
+    if k == 1:
+        out[0] = h[0] / a[0, 0]
+        return a[0, 0] != 0.0
+    m = a.copy()
+    x = h.copy()
+    for col in range(k):
+        piv = col
+        for r in range(col + 1, k):
+            if abs(m[r, col]) > abs(m[piv, col]):
+                piv = r
+        if m[piv, col] == 0.0:
+            return False
+        if piv != col:
+            for c in range(k):
+                m[col, c], m[piv, c] = m[piv, c], m[col, c]
+            x[col], x[piv] = x[piv], x[col]
+        for r in range(col + 1, k):
+            f = m[r, col] / m[col, col]
+            for c in range(col, k):
+                m[r, c] -= f * m[col, c]
+            x[r] -= f * x[col]
+    for r in range(k - 1, -1, -1):
+        acc = x[r]
+        for c in range(r + 1, k):
+            acc -= m[r, c] * out[c]
+        out[r] = acc / m[r, r]
+    return True
 
 
 def _move_disc(q: Quadratic, layout: Layout, k: int, limits: Rect, others: _Normal,

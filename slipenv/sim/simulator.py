@@ -18,7 +18,7 @@ import numpy as np
 from slipenv.contracts.constants import G_MPS2
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.injector import Injector
-from slipenv.sim.track_soil import TrackSoilInjector
+from slipenv.sim.track_soil import TrackModelParams, TrackSoilInjector
 from slipenv.sim.wheel_soil import WheelSoilInjector
 from slipenv.terrain.terrain import TerrainSpec, build_terrain
 from slipenv.terramechanics.models import ForceModel
@@ -175,7 +175,7 @@ class Simulator:
         if vehicle.track_model == "wong_chiang":
             self.injector = TrackSoilInjector(
                 self.client, vehicle, self.body, self.terrain.body_id, self.force_model,
-                self.soil_map, self.dt_s)
+                self.soil_map, self.dt_s, TrackModelParams(shear_law=vehicle.track_shear_law))
         else:
             self.injector = WheelSoilInjector(
                 self.client, vehicle, self.body, self.terrain.body_id, self.force_model,

@@ -27,12 +27,20 @@ Shear displacement (Wong & Chiang 2001, Proc. IMechE D 215:343-355; Wong, *Theor
 Shear stress (Janosi & Hanamoto; Wong Eq. 2.56) with Mohr-Coulomb strength (Wong Eq. 2.54):
     tau = (c + p tan phi)(1 - exp(-|j|/K)) (`janosi.shear_strength_pa`,
     `janosi.janosi_stress_pa`; per cell in `cell_forces`), directed against the local sliding
-    velocity (Wong & Chiang's choice). The direction is carried by a short "bristle" state e
-    per belt element, de/dt = v_j - |v_j| e/e_max (the LuGre / brush-model form, Canudas de
-    Wit et al. 1995): in sliding it aligns with v_j within a sliding distance of a few e_max,
-    so the steady forces are Wong-Chiang's (tested within 5 %); at rest it is an elastic
-    spring. A stress that jumped with the sign of v_j would be an infinitely stiff damper, which an
-    explicit step at 240 Hz cannot integrate (the vehicle chatters and ratchets downhill).
+    velocity (Wong & Chiang's choice): the ``"resultant"`` shear law (`SHEAR_LAWS`, the
+    default). The ``"decoupled"`` law (Ishigami, Miwa, Nagatani & Yoshida, J. Field Robotics
+    24(3) (2007) 233-250, for the longitudinal and lateral shear of a wheel on Toyoura sand)
+    takes each component from its own displacement, tau_x = tau_max (1 - exp(-|j_x|/K))
+    sgn(j_x) and tau_y likewise, against the displacement, with the resultant capped at the
+    Mohr-Coulomb strength tau_max (`decoupled_stress_pa`): a track sliding mostly sideways keeps
+    the longitudinal stress of its longitudinal displacement. The resultant law's direction is
+    carried by a short "bristle" state e per belt element, de/dt = v_j - |v_j| e/e_max (the
+    LuGre / brush-model form, Canudas de Wit et al. 1995): in sliding it aligns with v_j
+    within a sliding distance of a few e_max, so the steady forces are Wong-Chiang's (tested
+    within 5 %); at rest it is an elastic spring. A stress that jumped with the sign of v_j
+    would be an infinitely stiff damper, which an explicit step at 240 Hz cannot integrate (the
+    vehicle chatters and ratchets downhill); the decoupled law's sign is the displacement's,
+    continuous through j = 0.
     At rest the soil springs get Kelvin-Voigt dampers on each cell's displacement rate
     (`soil_damper_forces`; LuGre's sigma_1 term), zero in any steady motion.
 Normal pressure: the road-wheel loads, spread piecewise-linearly over the cells
@@ -81,6 +89,8 @@ __all__ = [
     "advance_shear",
     "steady_shear_displacement",
     "steady_track_forces",
+    "SHEAR_LAWS",
+    "decoupled_stress_pa",
     "cell_forces",
     "soil_damper_forces",
     "slip_sinkage_factor",
@@ -120,10 +130,16 @@ SOIL_ROWS = ("width_m", "inv_cell_area_m2", "k_c", "k_phi", "n_exp", "cohesion_p
 1/(b dx), Bekker's k_c, k_phi and n, cohesion c, tan phi, Janosi's K, phi."""
 (S_WIDTH, S_INV_AREA, S_KC, S_KPHI, S_N, S_C, S_TAN_PHI, S_K, S_PHI) = range(len(SOIL_ROWS))
 SETTING_NAMES = ("dx_m", "dt_s", "direction_length_m", "damping_ratio", "cell_mass_kg",
-                 "unit_weight_n_m3", "max_wall_height_m")
+                 "unit_weight_n_m3", "max_wall_height_m", "shear_law")
 """Entries of :func:`track_substep`'s ``settings`` array: cell length, substep, e_max, the
-dampers' zeta and cell mass, the soil's unit weight, the wall height where soil spills."""
-(P_DX, P_DT, P_E_MAX, P_ZETA, P_CELL_MASS, P_GAMMA, P_MAX_WALL) = range(len(SETTING_NAMES))
+dampers' zeta and cell mass, the soil's unit weight, the wall height where soil spills, the
+shear law's index in `SHEAR_LAWS`."""
+(P_DX, P_DT, P_E_MAX, P_ZETA, P_CELL_MASS, P_GAMMA, P_MAX_WALL,
+ P_SHEAR_LAW) = range(len(SETTING_NAMES))
+SHEAR_LAWS = ("resultant", "decoupled")
+"""The track's shear laws (module docstring): ``"resultant"``, Wong-Chiang's tau(|j|) against
+the sliding velocity; ``"decoupled"``, Ishigami et al.'s per-component law
+(`decoupled_stress_pa`)."""
 
 
 # -- normal pressure -------------------------------------------------------------------------
@@ -193,6 +209,43 @@ def shear_direction(vx, vy, jx, jy, v_reg: float = DIRECTION_SPEED_MPS):
     norm = np.hypot(dx, dy)
     inv = np.where(norm > 0.0, 1.0 / np.maximum(norm, _TINY), 0.0)
     return dx * inv, dy * inv
+
+
+def decoupled_stress_pa(jx_m: float, jy_m: float, strength_pa: float,
+                        shear_modulus_m: float) -> tuple[float, float, float]:
+    """Ishigami et al.'s decoupled shear stress (tau_x, tau_y) [Pa] of a displacement (j_x, j_y)
+    [m], along the displacement (the soil resists with -tau), and its tangent stiffness along
+    the stress [Pa/m].
+
+    Each component is Janosi's law of its own displacement, tau_x = tau_max (1 - exp(-|j_x|/K))
+    sgn(j_x), tau_y likewise (Ishigami, Miwa, Nagatani & Yoshida, J. Field Robotics 24(3)
+    (2007), the shear stresses of a wheel's contact, there with separate K_x, K_y; one K here), and
+    the resultant is capped at the Mohr-Coulomb strength tau_max = c + p tan phi (Wong Eq.
+    2.54; ``strength_pa``): independent components would otherwise reach sqrt 2 tau_max on a
+    diagonal, more than the soil can carry. The sign comes from the displacement itself, not
+    from the sliding direction, so the law is a function of j alone (a spring at rest). Pure
+    longitudinal or lateral displacement gives the resultant law's tau(|j|).
+
+    The stiffness is n . diag(d tau_x/d j_x, d tau_y/d j_y) . n along the stress direction n,
+    each d tau/d j = (tau_max - |tau|)/K; tau_max/K at j = 0; 0 on the cap (the resultant
+    cannot grow there), as the resultant law's tangent at its strength.
+    """
+    grow_x = -math.expm1(-abs(jx_m) / shear_modulus_m)
+    grow_y = -math.expm1(-abs(jy_m) / shear_modulus_m)
+    tx = math.copysign(strength_pa * grow_x, jx_m)
+    ty = math.copysign(strength_pa * grow_y, jy_m)
+    mag2 = tx * tx + ty * ty
+    if mag2 > strength_pa * strength_pa:  # the soil carries no more than its strength
+        cap = strength_pa / math.sqrt(mag2)
+        return tx * cap, ty * cap, 0.0
+    if mag2 <= 0.0:
+        return tx, ty, strength_pa / shear_modulus_m
+    weight = strength_pa / (shear_modulus_m * mag2)
+    stiffness = ((1.0 - grow_x) * tx * tx + (1.0 - grow_y) * ty * ty) * weight
+    return tx, ty, stiffness
+
+
+_decoupled = njit(cache=True)(decoupled_stress_pa)
 
 
 @njit(cache=True)
@@ -308,19 +361,29 @@ def steady_shear_displacement(x_m: np.ndarray, vx: float, vy: float, yaw_rate: f
 def steady_track_forces(vx: float, vy: float, yaw_rate: float, y_track_m: float,
                         belt_speed_mps: float, length_m: float, width_m: float,
                         pressure_pa: float, cohesion_pa: float, tan_phi: float,
-                        shear_modulus_m: float, n_quad: int = 4001) -> tuple[float, float, float]:
+                        shear_modulus_m: float, n_quad: int = 4001,
+                        shear_law: str = "resultant") -> tuple[float, float, float]:
     """The Wong-Chiang integrals F_x = b int tau_x dx, F_y = b int tau_y dx and
     M_z = b int (x tau_y - y_i tau_x) dx [N, N, N m] of one track under uniform pressure, in
-    steady motion (Wong & Chiang 2001; Wong, Theory of Ground Vehicles, Ch. 7)."""
+    steady motion (Wong & Chiang 2001; Wong, Theory of Ground Vehicles, Ch. 7), with the stress
+    of ``shear_law`` (`SHEAR_LAWS`): tau(|j|) against the sliding velocity, or the decoupled
+    components against the displacement (`decoupled_stress_pa`)."""
+    if shear_law not in SHEAR_LAWS:
+        raise ValueError(f"shear_law={shear_law!r} must be one of {SHEAR_LAWS}")
     x = np.linspace(length_m / 2.0, -length_m / 2.0, n_quad)
     jx, jy = steady_shear_displacement(x, vx, vy, yaw_rate, y_track_m, belt_speed_mps,
                                        length_m, n_quad)
-    vxs = np.full_like(x, vx - yaw_rate * y_track_m - belt_speed_mps)
-    vys = vy + yaw_rate * x
-    dxn, dyn = shear_direction(vxs, vys, jx, jy)
     strength = shear_strength_pa(pressure_pa, cohesion_pa, tan_phi)
-    tau = janosi_stress_pa(np.hypot(jx, jy), strength, shear_modulus_m)
-    tx, ty = -tau * dxn, -tau * dyn
+    if shear_law == "decoupled":
+        stress = [decoupled_stress_pa(a, b, float(strength), shear_modulus_m)[:2]
+                  for a, b in zip(jx, jy, strict=True)]
+        tx, ty = -np.array(stress).T
+    else:
+        vxs = np.full_like(x, vx - yaw_rate * y_track_m - belt_speed_mps)
+        vys = vy + yaw_rate * x
+        dxn, dyn = shear_direction(vxs, vys, jx, jy)
+        tau = janosi_stress_pa(np.hypot(jx, jy), strength, shear_modulus_m)
+        tx, ty = -tau * dxn, -tau * dyn
     h = length_m / (n_quad - 1)
     trap = lambda f: float(h * (f.sum() - 0.5 * (f[0] + f[-1])))  # noqa: E731
     return (width_m * trap(tx), width_m * trap(ty),
@@ -330,8 +393,8 @@ def steady_track_forces(vx: float, vy: float, yaw_rate: float, y_track_m: float,
 @njit(cache=True)
 def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: np.ndarray,
                 dx_m: float, cohesion_pa: np.ndarray, tan_phi: np.ndarray,
-                shear_modulus_m: np.ndarray,
-                out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                shear_modulus_m: np.ndarray, out: np.ndarray | None = None,
+                decoupled: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Shear force of each cell on the track and its tangent stiffness.
 
     A cell's j is the mean of its two faces, e its centre value; the stress tau(|j|) is
@@ -341,7 +404,9 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: 
     ``out`` when given. The stiffness k = b dx d tau/d|j| = b dx (q_max - tau)/K [N/m], shape
     (n_tracks, n_cells), is what :func:`soil_damper_forces` needs. The soil (``width_m``,
     ``cohesion_pa``, ``tan_phi``, ``shear_modulus_m``) is given per track, arrays of length
-    n_tracks.
+    n_tracks. With ``decoupled`` the stress is Ishigami et al.'s decoupled law instead
+    (`decoupled_stress_pa`: each component of its own displacement, against j; e unused), f =
+    -tau b dx, and k its tangent along the stress times b dx.
     """
     nt, nc = e.shape[1], e.shape[2]
     if out is None:
@@ -351,8 +416,16 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: 
         area = width_m[i] * dx_m
         spring = area / shear_modulus_m[i]
         for c in range(nc):
-            j_abs = math.hypot(j[0, i, c] + j[0, i, c + 1], j[1, i, c] + j[1, i, c + 1]) * 0.5
+            jx = (j[0, i, c] + j[0, i, c + 1]) * 0.5
+            jy = (j[1, i, c] + j[1, i, c + 1]) * 0.5
             strength = _strength(pressure_pa[i, c], cohesion_pa[i], tan_phi[i])
+            if decoupled:
+                tx, ty, k = _decoupled(jx, jy, float(strength), shear_modulus_m[i])
+                stiffness[i, c] = k * area
+                out[0, i, c] = -tx * area
+                out[1, i, c] = -ty * area
+                continue
+            j_abs = math.hypot(j[0, i, c] + j[0, i, c + 1], j[1, i, c] + j[1, i, c + 1]) * 0.5
             tau = _janosi(j_abs, strength, shear_modulus_m[i])
             stiffness[i, c] = (strength - tau) * spring
             scale = tau * -area / max(math.hypot(e[0, i, c], e[1, i, c]), _TINY)
@@ -552,7 +625,8 @@ def track_substep(load_n: np.ndarray, belt_speed_mps: np.ndarray, track_speed_mp
 
     Steps: cell pressures from the loads (``spread``, per unit cell area); Bekker's
     sinkage times the slip-sinkage factor; the shear field and direction state
-    (:func:`advance_shear`); the cell shear forces (:func:`cell_forces`) and the soil dampers on
+    (:func:`advance_shear`); the cell shear forces (:func:`cell_forces`, with the shear law
+    ``settings`` names) and the soil dampers on
     the change of the cells' displacement (:func:`soil_damper_forces`); the side walls
     (:func:`advance_wall`, :func:`wall_force_n_per_m`); the compaction resistance of each
     track's deepest cell (`bekker.compaction_resistance_n`).
@@ -581,7 +655,7 @@ def track_substep(load_n: np.ndarray, belt_speed_mps: np.ndarray, track_speed_mp
                               yaw_rate_rad_s, x_cell_m)
     advance_shear(j, e, v_cell, belt_speed_mps, yaw_rate_rad_s, dx, dt, settings[P_E_MAX])
     f_shear, stiffness = cell_forces(j, e, pressure, width, dx, soil[S_C], soil[S_TAN_PHI],
-                                     soil[S_K], out[2:4])
+                                     soil[S_K], out[2:4], settings[P_SHEAR_LAW] == 1.0)
     dj = j[:, :, :-1] + j[:, :, 1:]
     dj -= j_old
     dj *= 0.5

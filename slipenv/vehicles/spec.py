@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 VEHICLE_KINDS = ("diff_drive", "skid_steer", "rover4ws")
 TRACK_MODELS = ("per_wheel", "wong_chiang")
+TRACK_SHEAR_LAWS = ("resultant", "decoupled")  # slipenv.terramechanics.track.SHEAR_LAWS
 WHEEL_ROLES = ("driven", "caster")
 
 
@@ -231,6 +232,11 @@ class VehicleSpec:
         shear field along each track, with sinkage, rut and side-wall resistance,
         ``slipenv.terramechanics.track`` and ``slipenv.sim.track_soil``); needs
         ``track_length_m`` and a ``skid_steer`` vehicle.
+    track_shear_law : str
+        Shear law of the ``"wong_chiang"`` track model (`TRACK_SHEAR_LAWS`): ``"resultant"``
+        (default; Wong-Chiang's tau(|j|) against the sliding direction) or ``"decoupled"``
+        (Ishigami et al. 2007: each shear component of its own displacement, the resultant
+        capped at the Mohr-Coulomb strength; ``slipenv.terramechanics.track``).
     pivot_axle : PivotAxleSpec | None
         A passive axle pivoting about the longitudinal axis (rocker suspension); ``None``: the
         chassis and all wheel mounts form one rigid body.
@@ -265,6 +271,7 @@ class VehicleSpec:
     track_length_m: float | None = None
     contact_sinkage_m: float = 0.001
     track_model: str = "per_wheel"
+    track_shear_law: str = "resultant"
     pivot_axle: PivotAxleSpec | None = None
     assumed: tuple[str, ...] = field(default_factory=tuple)
 
@@ -320,6 +327,9 @@ class VehicleSpec:
                                                    or self.kind != "skid_steer"):
             raise ValueError(f"{owner}.track_model='wong_chiang' needs a skid_steer vehicle "
                              "with track_length_m")
+        if self.track_shear_law not in TRACK_SHEAR_LAWS:
+            raise ValueError(f"{owner}.track_shear_law must be one of {TRACK_SHEAR_LAWS}, "
+                             f"got {self.track_shear_law!r}")
         if self.urdf is not None and len(self.urdf_wheel_joints) != len(self.wheels):
             raise ValueError(f"{owner}: urdf_wheel_joints must name one joint per wheel")
         if (not isinstance(self.assumed, tuple)

@@ -211,8 +211,9 @@ def test_rejected_frames_leave_the_state_unchanged() -> None:
 
 
 def test_odometry_update_that_would_make_k_s_negative_is_undone() -> None:
-    """Counts far beyond the prediction with a loose k_s prior push k_s below zero: the update
-    is dropped (``odo_invalid_soil``) and the state is the prediction alone."""
+    """Counts beyond the prediction (a 40 % slip: a rolling wheel, inside the small-slip range)
+    with a loose k_s prior push k_s below zero: the update is dropped (``odo_invalid_soil``)
+    and the state is the prediction alone."""
     x = np.zeros(lm.N_SLIP)
     x[lm.IV], x[lm.IRL:lm.IRR + 1], x[lm.IKL:] = 1.0, 0.275, 100.0
     P = np.diag([1e-2] * 9 + [1e-4, 1e-4, 1e6, 1e6])
@@ -220,7 +221,7 @@ def test_odometry_update_that_would_make_k_s_negative_is_undone() -> None:
     for f in (ekf, pred):
         f.reset_state(x, P, frame(0.0, torque=(10.0, 10.0)))
     pred.predict_to(0.05)
-    ekf.update(frame(0.05, counts=(400.0, 400.0), torque=(10.0, 10.0)))
+    ekf.update(frame(0.05, counts=(87.0, 87.0), torque=(10.0, 10.0)))
     assert ekf.skipped["odo_invalid_soil"] == 1 and ekf.history["odo"] == []
     np.testing.assert_array_equal(ekf.x, pred.x)
     np.testing.assert_array_equal(ekf.P, pred.P)
@@ -274,3 +275,48 @@ def test_warm_up_runs_every_sensor_quietly(caplog: pytest.LogCaptureFixture) -> 
     with caplog.at_level(logging.WARNING, logger="slipenv.estimators.lindgren.ekf"):
         warm_up()
     assert caplog.text == ""
+
+
+def test_unsorted_and_nan_bearings_give_the_state_of_the_sorted_finite_ones() -> None:
+    """The kernel takes a frame's bearings as they come and hands back the frame when they are
+    out of order or NaN; the filter then sorts them, drops the NaN ones (counted) and runs the
+    frame again: the same state as a frame that had them in order."""
+    run = synthetic(120)
+    messy = []
+    for f in run.frames:
+        t, z = f.beacon_times_s, f.beacon_bearings_rad
+        if len(t) >= 2:  # reversed, with a NaN bearing added at the frame's time
+            f = dataclasses.replace(f, beacon_times_s=np.append(t[::-1], f.t_s),
+                                    beacon_bearings_rad=np.append(z[::-1], math.nan))
+        messy.append(f)
+    assert sum(len(f.beacon_times_s) >= 3 for f in messy) > 10
+    ekfs = [LindgrenEKF(GEOM, 4, beacons_xy=CROSS) for _ in range(2)]
+    for ekf, frames in zip(ekfs, (run.frames, messy), strict=True):
+        ekf.reset(*run.truth[0, :3], frames[0])
+        for f in frames[1:]:
+            ekf.update(f)
+    np.testing.assert_array_equal(ekfs[1].x, ekfs[0].x)
+    np.testing.assert_array_equal(ekfs[1].P, ekfs[0].P)
+    n_nan = sum(len(f.beacon_times_s) >= 3 for f in messy[1:])
+    assert ekfs[1].skipped.get("bearing_nan") == n_nan
+    assert ekfs[0].skipped.get("bearing_nan") is None
+
+
+@pytest.mark.parametrize("scheme", [4, 5])
+def test_odometers_correct_a_soil_estimate_that_gives_the_torque_too_much_slip(
+        scheme: int) -> None:
+    """A k_s prior so low that the measured torque would slip the wheels beyond the small-slip
+    range (|T| / k_s > max_slip) while the counts show them rolling at a few per cent: the soil
+    estimate is outside the model, not the wheels. The odometers must still be used and move
+    k_s towards the truth; a range check on the estimate's own slip would reject every
+    odometer reading and keep the wrong k_s for good (no sensor but the odometers sees k_s)."""
+    run = synthetic(400)  # true k_s 2500 / 2200, torque 150 ± 100 N m: true slip ~0.07
+    params = LindgrenNoise(k_s0=200.0)  # the estimate's slip: 0.25 to 1.25
+    ekf = LindgrenEKF(GEOM, scheme, params)  # no beacons: odometers and inertial sensors
+    ekf.reset(*run.truth[0, :3], run.frames[0])
+    for f in run.frames[1:]:
+        ekf.update(f)
+    assert ekf.skipped.get("slip_out_of_range", 0) == 0
+    assert len(ekf.history["odo"]) >= 0.95 * (len(run.frames) - 1)
+    k_s = ekf.x[lm.IKL:lm.IKR + 1]
+    assert np.all(k_s > 3.0 * params.k_s0), k_s

@@ -174,3 +174,48 @@ def test_clamp_moves_b_to_zero_and_keeps_its_mean_square_error(b: float) -> None
     kernel.constrain_shape(x2, P2)  # b >= 0 everywhere: nothing changes
     np.testing.assert_array_equal(x2, x)
     np.testing.assert_array_equal(P2, P)
+
+
+def test_prediction_in_a_used_workspace_is_F_P_Ft_plus_Q() -> None:
+    """The filter's prediction reuses one workspace frame after frame: whatever an earlier call
+    left in it, x becomes f(x) and P becomes F P F' + Q (Lindgren Eq. 6-7)."""
+    rng = np.random.default_rng(5)
+    n = lm.N_OKELLO + 1
+    x = rng.normal(size=n)
+    x[lm.IRL:lm.IRR + 1], x[lm.IKL:lm.IKR + 1] = 0.28, 900.0
+    P = random_spd(rng, n)
+    cfg = rng.uniform(1e-4, 1e-2, kernel.N_CFG)
+    work = np.full(kernel.work_size(n), 1e300)
+    iwork = rng.integers(-5, 5, kernel.iwork_size(n))
+    tau = 0.05
+    F = lm.process_F(x, tau)
+    Q = lm.process_Q(x, tau, *cfg[[kernel.C_JERK_V, kernel.C_JERK_W, kernel.C_TILT_PSD,
+                                  kernel.C_RADIUS_VAR, kernel.C_KS_VAR, kernel.C_B_VAR,
+                                  kernel.C_KBETA_VAR]])
+    x_expected, P_expected = lm.process_fx(x, tau), F @ P @ F.T + Q
+    x_expected[lm.ITH] = lm.wrap(x_expected[lm.ITH])
+    for _ in range(2):  # the second call finds the first one's temporaries
+        xk, Pk = x.copy(), P.copy()
+        kernel.predict_into(xk, Pk, tau, cfg, work, iwork)
+        np.testing.assert_allclose(xk, x_expected, rtol=1e-13, atol=1e-13)
+        np.testing.assert_allclose(Pk, P_expected, rtol=1e-12, atol=1e-14)
+
+
+@pytest.mark.parametrize("nz", [1, 2])
+def test_update_in_a_used_workspace_is_the_textbook_update(nz: int) -> None:
+    rng = np.random.default_rng(nz)
+    n = 14
+    x, P = rng.normal(size=n), random_spd(rng, n)
+    H, R = rng.normal(size=(nz, n)), random_spd(rng, nz)
+    y = rng.normal(size=nz)
+    S = H @ P @ H.T + R
+    K = P @ H.T @ np.linalg.inv(S)
+    x_expected, P_expected = x + K @ y, P - K @ S @ K.T
+    x_expected[lm.ITH] = lm.wrap(x_expected[lm.ITH])
+    work = np.full(kernel.work_size(n), -1e300)
+    for _ in range(2):
+        xk, Pk = x.copy(), P.copy()
+        assert kernel.update_into(xk, Pk, y, H, R, math.inf, -1, np.empty(nz * nz), work,
+                                  np.full(2, math.nan), np.zeros(0), 0.5) == kernel.ACCEPTED
+        np.testing.assert_allclose(xk, x_expected, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(Pk, P_expected, rtol=1e-10, atol=1e-12)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import timeit
 
 import numpy as np
 import pytest
@@ -144,18 +143,28 @@ def test_sample_path_returns_arrays_covering_the_whole_path():
         path.sample(0.0)
 
 
-def test_hinted_projection_on_a_ten_segment_path_takes_under_50_microseconds():
+def test_a_hinted_projection_examines_only_the_segments_its_search_window_overlaps(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # The projection's cost per control step is in `slipenv bench` (observation_reward); what a
+    # test can hold is the algorithm: with a hint, the work does not grow with the path's length.
     path = field_rows()
     assert len(path.segments) == 10
-    queries = [(x + 0.1, y - 0.2, s) for s in np.linspace(0.0, path.length_m, 50)
-               for x, y, _ in [path.pose_at(s)]]
-
-    def project_all():
-        for x, y, s in queries:
-            path.project(x, y, s)
-
-    best = min(timeit.repeat(project_all, number=20, repeat=5)) / (20 * len(queries))
-    assert best < 50e-6, f"{best * 1e6:.1f} µs per projection"
+    examined: list[int] = []
+    for cls in {type(seg) for seg in path.segments}:
+        def counting(self, *args, _nearest=cls.nearest, **kwargs):
+            examined[-1] += 1
+            return _nearest(self, *args, **kwargs)
+        monkeypatch.setattr(cls, "nearest", counting)
+    starts = np.cumsum([0.0] + [seg.length_m for seg in path.segments])
+    for s in np.linspace(0.0, path.length_m, 50):
+        x, y, _ = path.pose_at(s)
+        examined.append(0)
+        proj = path.project(x + 0.1, y - 0.2, s)
+        lo, hi = max(s - path.search_back_m, 0.0), min(s + path.search_ahead_m, path.length_m)
+        overlapping = int(np.sum((starts[:-1] <= hi) & (starts[1:] >= lo)))
+        assert 1 <= examined[-1] <= overlapping <= 3
+        examined.append(0)
+        assert path.project(x + 0.1, y - 0.2).s == pytest.approx(proj.s, abs=1e-9)
 
 
 def test_segment_boundaries_hand_over_without_gaps():

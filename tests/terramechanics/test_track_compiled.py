@@ -4,7 +4,8 @@
 runs the same functions as plain Python (the oracle). Here one composed substep
 (`track.track_substep`) runs both ways on the same random fields and inputs, over every
 upwinding case of the shear field (belt forward, reversing, at rest) and of the side walls
-(ground moving ahead, back, at rest): every state and output agrees to 1e-12 relative. The two
+(ground moving ahead, back, at rest), with each shear law (`track.SHEAR_LAWS`): every state
+and output agrees to 1e-12 relative. The two
 differ only in rounding (numba's libm calls against Python's); a wrong index, sign or sweep
 direction in the compiled loops would be off by far more.
 """
@@ -19,7 +20,7 @@ import sys
 import numpy as np
 import pytest
 
-from slipenv.terramechanics.track import SETTING_NAMES, SOIL_ROWS, track_substep
+from slipenv.terramechanics.track import SETTING_NAMES, SHEAR_LAWS, SOIL_ROWS, track_substep
 
 REL = 1e-12
 NT, NC, NW = 2, 8, 4
@@ -35,7 +36,7 @@ CASES = {
 }
 
 
-def _inputs(case: str) -> dict:
+def _inputs(case: str, law: str = "resultant") -> dict:
     rng = np.random.default_rng(sorted(CASES).index(case))
     u, vx = CASES[case]
     spread = rng.uniform(0.0, 1.0, (NT * NC, NW))
@@ -46,7 +47,7 @@ def _inputs(case: str) -> dict:
             "shear_modulus_m": [0.025, 0.01], "friction_angle_rad": [0.49, 0.61]}
     settings = {"dx_m": 0.03, "dt_s": 1 / 240, "direction_length_m": 1e-3,
                 "damping_ratio": 1.0, "cell_mass_kg": 0.9, "unit_weight_n_m3": 13.1e3,
-                "max_wall_height_m": 0.1}
+                "max_wall_height_m": 0.1, "shear_law": float(SHEAR_LAWS.index(law))}
     return {
         "load_n": rng.uniform(0.0, 40.0, NW), "belt_speed_mps": np.array(u),
         "track_speed_mps": np.array(vx), "lateral_speed_mps": rng.normal(0.0, 0.02, NT),
@@ -64,9 +65,10 @@ def _inputs(case: str) -> dict:
     }
 
 
-def _run(case: str) -> dict:
-    """The substep on `case`'s inputs (three substeps, so the swept fields feed back)."""
-    a = _inputs(case)
+def _run(case: str, law: str = "resultant") -> dict:
+    """The substep on `case`'s inputs with shear law `law` (three substeps, so the swept fields
+    feed back)."""
+    a = _inputs(case, law)
     for _ in range(3):
         track_substep(*a.values())
     return {k: a[k].tolist() for k in STATE}
@@ -74,8 +76,8 @@ def _run(case: str) -> dict:
 
 _SCRIPT = """
 import json, sys
-from tests.terramechanics.test_track_compiled import CASES, _run
-print(json.dumps({case: _run(case) for case in CASES}))
+from tests.terramechanics.test_track_compiled import CASES, SHEAR_LAWS, _run
+print(json.dumps({f"{case}/{law}": _run(case, law) for case in CASES for law in SHEAR_LAWS}))
 """
 
 
@@ -89,11 +91,14 @@ def plain_python() -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.parametrize("law", SHEAR_LAWS)
 @pytest.mark.parametrize("case", sorted(CASES))
-def test_the_compiled_substep_equals_its_text_run_as_plain_python(case, plain_python):
-    compiled = _run(case)
+def test_the_compiled_substep_equals_its_text_run_as_plain_python(case, law, plain_python):
+    compiled = _run(case, law)
     for name in STATE:
-        got, want = np.array(compiled[name]), np.array(plain_python[case][name])
+        got, want = np.array(compiled[name]), np.array(plain_python[f"{case}/{law}"][name])
         scale = max(np.abs(want).max(), 1e-300)
         np.testing.assert_allclose(got, want, rtol=0.0, atol=REL * scale, err_msg=name)
     assert np.abs(np.array(compiled["out"])).max() > 0.0  # the case exercised the forces
+    if law != "resultant":  # the law reached the cells
+        assert compiled["out"] != _run(case, "resultant")["out"]

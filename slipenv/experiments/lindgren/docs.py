@@ -194,8 +194,16 @@ Measured on the same headline frames:
   the cut scheme 4 without k_β ends {h4nl:.3f} m off instead of {h4:.3f} m (ablation:
   {a4nl:.3f} against {a4:.3f} m). The oracle with k_β ends {ho_lat:.3f} m off instead of
   {oracle:.3f} m (ablation {ao_lat:.3f} against {oracle_abl:.3f} m){oracle_lat_note}.
-  The means after the cut are dominated by single drives whose dead reckoning diverges (every
-  drive's value is in the JSON).
+  No drive's filter locks the odometers out any more (every drive's value is in the JSON):
+  a check of the slip the soil estimate gave the measured torque used to reject every later
+  odometer reading once one update at the end of a turn had lowered k_s past it, so the soil
+  estimate, which only the odometers correct, was never corrected again, bearings carried
+  k_s negative through its correlation with the position, and after the cut single drives
+  ended 40 m to 1 km off. The filter now skips a wheel's odometer only when its own counts
+  show it spinning or locked, and keeps the soil estimate in the model's range for the
+  measured torque. Still open: the oracle with k_β has no inclinometer on these drives and
+  explains the crab by a pitch far outside the field's, which the 180° turns rotate into a
+  large slip angle.
 - **Learning time before the cut.** With the laser cut at {cut2:g} s instead (the
   odometry-only stretch is then {after2:.0f} s instead of {after:.0f} s), scheme 4 ends
   {h4x2:.3f} m off (the scheme-4 oracle, given the law's zero-slip slope, {hox2:.3f} m).

@@ -80,14 +80,16 @@ DIFFERENCES = """\
   from the 1 s ground truth on the mounds, against 1.58° for the whole trace.
 - **FTrace's counters, per test** (frames / false positives / false negatives /
   misidentifications): sideways {ft_side}; mounds {ft_mounds}. False positives come from the
-  first second of each drive (a trace shorter than the 15 cm the truth asks for).
+  first second of each drive (a trace shorter than the 15 cm the truth asks for; FTrace does
+  not report a trace followed over less than that, `FTraceConfig.min_trace_m`).
   Misidentifications come mostly from the mounds, where the front wheel's rut overlaps the
-  watched rear wheel's and the two diverge: a rut wall comes with parallel edges a few
-  millimetres away (its floor edge, its berm, the older rut's wall), and the line fitted on a
-  12 mm band around the chosen walls was pulled towards them; FTrace now fits on a 4 mm band
-  (about one Canny edge, set on test 1: 8 of 1988 frames misidentified there before, 1-2
-  after). What remains is FTrace taking a mix of the front and rear ruts' walls while the two
-  overlap within a centimetre or two at the wheel. The camera's mount error is drawn once per
+  watched rear wheel's and the two diverge: the crabbing rover's front wheel leaves an older,
+  straight rut beside the bending rear one, and a straight line fitted to the visible trace
+  took the straight piece (the rear rut's far half and the front rut's outer wall: nearly every
+  misidentified frame before the change). FTrace fits the line to the rut walls
+  followed along the bend, on a 4 mm band (about one Canny edge, set on test 1), and keeps the
+  straight band's line where the walls are not followed to the wheel. What remains is FTrace
+  choosing a pair of walls mixed from the two ruts. The camera's mount error is drawn once per
   seed (the same for both tests of a seed) and shifts the angle by minus its yaw (seed 0:
   -0.49° of yaw, +0.5° of angle error in both tests).
 - **Yaw rate of Eq. 2** from the gyro averaged over 4 s, not the differentiated compass

@@ -49,3 +49,27 @@ def frames(n_frames: int, seed: int, config: TraceCameraConfig | None = None,
         pose = [poses[i, 0], poses[i, 1], 0.0, roll, pitch, poses[i, 2]]
         out.append(camera.measure(hist, pose, rng, t_s=k / 5.0))
     return out
+
+
+def bending_crab_frame(beta_far_deg: float, beta_near_deg: float, turn_m: float, seed: int,
+                       sinkage_m: float = 0.01) -> TraceFrame:
+    """One frame behind a rover that crabs at a constant heading while its course bends.
+
+    The body keeps yaw 0 and drives 2.5 m on a course at ``beta_far_deg`` that turns steadily
+    to ``beta_near_deg`` over the last ``turn_m``. The front-left wheel's rut is the older
+    course, so it runs beside the rear-left rut within a few centimetres (the rear wheel rolls
+    last and overwrites it where they overlap) while the rear rut bends in the view. No
+    nuisances and an exactly mounted camera, so what is measured is the two ruts' geometry.
+    """
+    s = np.linspace(0.0, 2.5, 501)
+    course = np.radians(np.interp(s, [0.0, 2.5 - turn_m, 2.5],
+                                  [beta_far_deg, beta_far_deg, beta_near_deg]))
+    step = np.diff(s, prepend=0.0)
+    poses = np.column_stack([np.cumsum(step * np.cos(course)), np.cumsum(step * np.sin(course)),
+                             np.zeros_like(s)])
+    tracks = history_from_poses(poses, WHEELS, 0.08, sinkage_m)
+    config = TraceCameraConfig(p_old_trace=0.0, p_shadow=0.0, p_patch=0.0,
+                               calibration_error_deg=0.0)
+    rng = np.random.default_rng(seed)
+    camera = TraceCamera(config)
+    return camera.measure(tracks, [poses[-1, 0], poses[-1, 1], 0.0, 0.0, 0.0, 0.0], rng)
