@@ -42,6 +42,7 @@ from slipenv.contracts.camera import PinholeCamera
 
 from .fuzzy import FuzzyTraceRules
 from .trace_lines import (
+    STRIP_M,
     TraceCurve,
     candidates_from_segments,
     edge_points_ground,
@@ -225,6 +226,14 @@ class FTrace:
 
     def __init__(self, camera: PinholeCamera, config: FTraceConfig | None = None) -> None:
         self.camera, self.config = camera, config or FTraceConfig()
+        # where the view lies on the ground, fixed by the camera model and the ground plane
+        rows, cols = camera.shape
+        z = self.config.ground_z_m
+        corners = np.array([[0.0, 0.0], [cols, 0.0], [0.0, rows], [cols, rows]])
+        # body x of the view's edge nearest the wheel, relative to the contact point [m]
+        self._view_near_u = float(np.nanmax(camera.image_to_ground(corners, z)[:, 0])) \
+            - self.config.wheel_xy_m[0]
+        self._view_mid_x = float(camera.image_to_ground([[cols / 2.0, rows / 2.0]], z)[0, 0])
         self.reset()
 
     def reset(self) -> None:
@@ -256,7 +265,7 @@ class FTrace:
         cands = candidates_from_segments(ground, cfg.wheel_xy_m, cfg.wheel_width_m)
         best, conf = -1, 0.0
         if len(cands.angle):
-            x_mid = self._view_mid_x()
+            x_mid = self._view_mid_x
             mid = cands.offset + (x_mid - cfg.wheel_xy_m[0]) * np.tan(cands.angle)
             scores = cfg.rules.confidence(
                 cands.offset, mid, cands.angle,
@@ -328,21 +337,9 @@ class FTrace:
         counts = np.bincount(walls.group, minlength=n_walls)
         if 3 * counts.min() < counts.max():
             return math.nan
-        if walls.u_range[1] < self._view_near_u() - 0.08:  # follow_trace's strip
+        if walls.u_range[1] < self._view_near_u - STRIP_M:
             return math.nan
         return walls.line_angle()
-
-    def _view_near_u(self) -> float:
-        """Body x of the view's edge nearest the wheel, relative to the contact point [m]."""
-        rows, cols = self.camera.shape
-        corners = np.array([[0.0, 0.0], [cols, 0.0], [0.0, rows], [cols, rows]])
-        x = self.camera.image_to_ground(corners, self.config.ground_z_m)[:, 0]
-        return float(np.nanmax(x)) - self.config.wheel_xy_m[0]
-
-    def _view_mid_x(self) -> float:
-        rows, cols = self.camera.shape
-        return float(self.camera.image_to_ground([[cols / 2.0, rows / 2.0]],
-                                                 self.config.ground_z_m)[0, 0])
 
     def roi_mask(self) -> np.ndarray:
         """uint8 mask (255 inside) of the region searched in the next frame.

@@ -208,10 +208,14 @@ def _fit_parallel(u: np.ndarray, y: np.ndarray, group: np.ndarray, n_groups: int
     return np.concatenate([sol, [0.0]]) if not quadratic else sol
 
 
+STRIP_M = 0.08
+"""Length along body x [m] of the strips :func:`follow_trace` grows a trace by."""
+
+
 def follow_trace(points: np.ndarray, edge_lines: np.ndarray, angle_rad: float,
                  x_wheel_m: float, normals: np.ndarray | None = None,
                  max_normal_tilt_rad: float = math.radians(30.0),
-                 band_m: float = 0.012, strip_m: float = 0.08,
+                 band_m: float = 0.012, strip_m: float = STRIP_M,
                  min_points: int = 10, min_quadratic_span_m: float = 0.25) -> TraceCurve | None:
     """Follow a candidate's rut edges along the ground and fit them as a curve.
 

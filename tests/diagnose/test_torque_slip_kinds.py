@@ -43,9 +43,9 @@ def test_rover_torque_slip_is_sized_for_the_grade_torque():
 
 
 def test_skid_steer_torque_slip_stands_on_a_slope_whose_grade_torque_the_turn_does_not_set():
+    hiding = effect("torque_slip").hiding
+    assert hiding is not None
     for kind in ("skid_steer", "tracked"):
-        hiding = effect("torque_slip").hiding
-        assert hiding is not None
         low, high = hiding.slope_range(synth.PHYSICAL_KIND[kind]) or (0.0, 0.0)
         assert (low, high) == (6.0, 12.0), kind
     # turning slip, the same softer law with no torque column, stays on level ground

@@ -61,9 +61,14 @@ def test_the_summary_restates_the_detailed_metrics(quick):
 
 def test_each_law_drives_the_papers_three_laps_judged_in_the_envs_corridor(quick):
     m = quick[0]["metrics"]
+    pf = m["path_following"]
     assert m["laps_run"] == 3
-    for law, done in m["laps_completed"].items():
-        assert 0 <= done <= 3, law
+    for law, run in (("feedback_gyrodometry", "feedback_gyrodometry"),
+                     ("feedforward_slip_compensated", "feedforward")):
+        assert len(pf[run]["per_seed_mean_error_m"]) == 3, law  # one lap per seed, three seeds
+        assert m["laps_completed"][law] == pf[run]["completed"], law
+        if pf[run]["completed"] == 3:  # every lap inside the env's 0.1 m corridor
+            assert pf[run]["max_error_m"] <= 0.1, law
 
 
 def test_the_command_runs_the_envs_world_the_track_model_on_toyoura_sand_by_default(quick):

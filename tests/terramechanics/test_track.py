@@ -109,14 +109,11 @@ def test_steady_turn_thrusts_and_turning_moment_match_the_wong_chiang_integrals(
     assert fx[0] > fx[1]
 
 
-@pytest.mark.parametrize("v,radius,vy,ratio_outer,ratio_inner", [
-    (0.1, 0.5, 0.01, 0.8, 0.85), (0.05, 0.25, 0.0, 0.7, 0.7)])
-def test_in_a_steady_turn_the_shear_field_is_wong_chiangs_path_integral(
-        v, radius, vy, ratio_outer, ratio_inner):
-    """The advected field j(x) at the faces against the exact path integral, the hull's
-    rotation during contact included: within 1 % where the hull turns by less than 2 rad
-    while the soil passes under the track (the 0.25 m circle's inner track turns by 7.5 rad;
-    first-order upwinding smears it by a few per cent)."""
+def steady_turn(v, radius, vy, ratio_outer, ratio_inner):
+    """The shear field (j, e) of a left turn of ``radius`` [m] at ``v`` [m/s] with lateral
+    drift ``vy``, the tracks at slip ratios ``ratio_*`` (ground over belt speed), run until the
+    slowest belt has passed its contact length three times: (omega, ys, us, j, e), outer
+    (right) track first."""
     half = 0.205
     omega = v / radius
     ys = np.array([-half, half])
@@ -125,6 +122,18 @@ def test_in_a_steady_turn_the_shear_field_is_wong_chiangs_path_integral(
     vc = sliding_velocity(v - omega * ys, us, np.full(2, vy), omega, np.array([X_CELL, X_CELL]))
     for _ in range(int((3 * L / min(us) + 2.0) / DT)):
         advance_shear(j, e, vc, us, omega, DX, DT, E_MAX)
+    return omega, ys, us, j, e
+
+
+@pytest.mark.parametrize("v,radius,vy,ratio_outer,ratio_inner", [
+    (0.1, 0.5, 0.01, 0.8, 0.85), (0.05, 0.25, 0.0, 0.7, 0.7)])
+def test_in_a_steady_turn_the_shear_field_is_wong_chiangs_path_integral(
+        v, radius, vy, ratio_outer, ratio_inner):
+    """The advected field j(x) at the faces against the exact path integral, the hull's
+    rotation during contact included: within 1 % where the hull turns by less than 2 rad
+    while the soil passes under the track (the 0.25 m circle's inner track turns by 7.5 rad;
+    first-order upwinding smears it by a few per cent)."""
+    omega, ys, us, j, _ = steady_turn(v, radius, vy, ratio_outer, ratio_inner)
     faces = L / 2 - DX * np.arange(N + 1)
     checked = 0
     for i in range(2):

@@ -17,16 +17,25 @@ from slipenv.terrain.terrain import TerrainSpec
 from slipenv.terramechanics.presets import DRY_SAND
 from slipenv.terramechanics.track import (
     SHEAR_LAWS,
-    advance_shear,
     cell_forces,
     decoupled_stress_pa,
-    sliding_velocity,
     steady_track_forces,
 )
 from slipenv.vehicles.presets import tracked_patako_wong_chiang
 from slipenv.vehicles.spec import TRACK_SHEAR_LAWS
 from tests.sim.conftest import hold
-from tests.terramechanics.test_track import B_W, DT, DX, E_MAX, TAN_PHI, X_CELL, C, K, L, N, P
+from tests.terramechanics.test_track import (
+    B_W,
+    DX,
+    TAN_PHI,
+    C,
+    K,
+    L,
+    N,
+    P,
+    soil,
+    steady_turn,
+)
 
 
 def _cells(jx, jy, pressure, decoupled, e=None):
@@ -38,9 +47,9 @@ def _cells(jx, jy, pressure, decoupled, e=None):
     j[0], j[1] = jx.reshape(n_t, 1), jy.reshape(n_t, 1)
     if e is None:
         e = np.stack((jx, jy)).reshape(2, n_t, 1) * 1.0
-    soil = (np.full(n_t, B_W), DX, np.full(n_t, C), np.full(n_t, TAN_PHI), np.full(n_t, K))
+    b, c, tan_phi, k_mod = soil(n_t)
     pressure = np.broadcast_to(np.asarray(pressure, float).reshape(-1, 1), (n_t, 1)).copy()
-    (fx, fy), k = cell_forces(j, e, pressure, soil[0], *soil[1:], None, decoupled)
+    (fx, fy), k = cell_forces(j, e, pressure, b, DX, c, tan_phi, k_mod, None, decoupled)
     return fx[:, 0], fy[:, 0], k[:, 0]
 
 
@@ -143,16 +152,9 @@ def test_in_a_steady_turn_the_decoupled_cells_give_the_decoupled_integrals(
     """The transient scheme at steady state with the decoupled law: each track's thrust and
     lateral force within 5 % of the exact integrals of the same law, where the hull turns by
     less than 2 rad while the soil passes under the track (the field's own accuracy bound)."""
-    half = 0.205
-    omega = v / radius
-    ys = np.array([-half, half])
-    us = np.array([(radius + half) * omega / ratio_outer, (radius - half) * omega / ratio_inner])
-    j, e = np.zeros((2, 2, N + 1)), np.zeros((2, 2, N))
-    vc = sliding_velocity(v - omega * ys, us, np.full(2, vy), omega, np.array([X_CELL, X_CELL]))
-    for _ in range(int((3 * L / min(us) + 2.0) / DT)):
-        advance_shear(j, e, vc, us, omega, DX, DT, E_MAX)
-    soil = (np.full(2, B_W), DX, np.full(2, C), np.full(2, TAN_PHI), np.full(2, K))
-    (fx, fy), _ = cell_forces(j, e, np.full((2, N), P), *soil, None, True)
+    omega, ys, us, j, e = steady_turn(v, radius, vy, ratio_outer, ratio_inner)
+    b, c, tan_phi, k = soil(2)
+    (fx, fy), _ = cell_forces(j, e, np.full((2, N), P), b, DX, c, tan_phi, k, None, True)
     checked = 0
     for i in range(2):
         if omega * L / us[i] > 2.0:
