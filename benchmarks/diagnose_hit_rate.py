@@ -20,6 +20,11 @@ effect x vehicle table.
 length and adds the vehicle x length table (named right / logs, false alarms on the clean
 logs, confounded logs); logs are printed as they finish, clean logs first and the rest round
 by round over lengths and vehicles, so a run stopped early has covered every cell alike.
+``--by-length`` runs the lengths one after another instead (each table completes before the
+next starts). ``--first SEEDS`` runs those seeds' logs before the others (a last run's misses,
+to see a fix early). ``--jsonl FILE`` appends each outcome as it finishes, ``--resume`` skips
+the logs FILE already holds, and ``--tables-from FILE`` prints the tables of what a run,
+finished or stopped, saved there.
 
 The generator's seeds change every run (printed; pass ``--seed`` to repeat a run).
 
@@ -60,9 +65,11 @@ its own torque times the compliance under the vehicle).
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
 
 import numpy as np
 
@@ -409,6 +416,23 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--soil-kinds", default="diff_drive",
                         help="comma-separated vehicle kinds of --soil (diff_drive: every "
                              "layout; skid_steer, rover4ws: the tests' two rectangles)")
+    parser.add_argument("--jsonl", default=None,
+                        help="append each PyBullet log's outcome to this file as it finishes "
+                             "(one JSON line; a run stopped early keeps what it found)")
+    parser.add_argument("--first", default="",
+                        help="comma-separated seeds whose logs run first, shortest length "
+                             "first (e.g. the last run's misses); the seeds and the rest of "
+                             "the order are unchanged")
+    parser.add_argument("--resume", action="store_true",
+                        help="with --jsonl: skip the logs (seed and length) the file already "
+                             "holds, and put them in the tables")
+    parser.add_argument("--by-length", action="store_true",
+                        help="run the lengths one after another, shortest first (each "
+                             "length's table completes before the next starts), instead of "
+                             "round by round over them")
+    parser.add_argument("--tables-from", default=None,
+                        help="print the tables of outcomes saved by --jsonl instead of "
+                             "running (with --vehicles for the effect x vehicle table)")
     parser.add_argument("--lengths", default="60,120,300",
                         help="comma-separated log lengths [s] of --kinds")
     args = parser.parse_args(argv)
@@ -429,6 +453,13 @@ def main(argv: list[str] | None = None) -> int:
         if v is not None and not any(v in HIDDEN_ON[e] for e in effects):
             parser.error(f"--effects {args.effects}: none is hidden on {v} "
                          f"(see slipenv.diagnose.synth.KINDS)")
+    if args.tables_from:
+        saved = [json.loads(line) for line in Path(args.tables_from).read_text().splitlines()
+                 if line.strip()]
+        found = sorted({r["duration"] for r in saved})
+        print_tables({d: [r for r in saved if r["duration"] == d] for d in found},
+                     vehicles if args.vehicles else None)
+        return 0
     if args.kinds > 0:
         lengths = [float(v) for v in args.lengths.split(",")]
         print(kinds_table(args.kinds, lengths, args.jobs), flush=True)
@@ -461,8 +492,24 @@ def main(argv: list[str] | None = None) -> int:
     # so that a run stopped early has covered every cell alike
     rank = {(j[0], j[2]): (j[1] != "none", (j[0] - base * 1000) % max(args.n, 1),
                            durations.index(j[2])) for j in jobs}
-    jobs.sort(key=lambda j: rank[(j[0], j[2])])
+    first = [int(v) for v in args.first.split(",") if v]
+    jobs.sort(key=lambda j: (durations.index(j[2]) if args.by_length else 0,
+                             j[0] not in first,
+                             (durations.index(j[2]), first.index(j[0])) if j[0] in first
+                             else rank[(j[0], j[2])]))
     by_length: dict[float, list[dict]] = {d: [] for d in durations}
+    if args.resume and args.jsonl and Path(args.jsonl).exists():
+        done = {}
+        for line in Path(args.jsonl).read_text().splitlines():
+            if line.strip():
+                r = json.loads(line)
+                done[(r["seed"], r["duration"])] = r
+        for j in jobs:
+            if (j[0], j[2]) in done:
+                by_length[j[2]].append(done[(j[0], j[2])])
+        jobs = [j for j in jobs if (j[0], j[2]) not in done]
+        print(f"resumed: {sum(map(len, by_length.values()))} logs from {args.jsonl}, "
+              f"{len(jobs)} to run", flush=True)
     start = time.perf_counter()
     # one pool for every length: a worker's cached calibration runs serve all its logs
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
@@ -477,18 +524,27 @@ def main(argv: list[str] | None = None) -> int:
                   f"{'+' + '+'.join(r['also']) if r['also'] else ''}  "
                   f"[{r['diag_s']:.1f} s]  {zs}", flush=True)
             by_length[r["duration"]].append(r)
+            if args.jsonl:
+                with open(args.jsonl, "a") as out:
+                    out.write(json.dumps(r) + "\n")
+    print_tables(by_length, vehicles if args.vehicles else None)
+    print(f"\nwall time {time.perf_counter() - start:.0f} s", flush=True)
+    return 0
+
+
+def print_tables(by_length: dict[float, list[dict]], vehicles: list[str] | None) -> None:
+    """The hit-rate table of every length, the effect x vehicle tables with ``vehicles``, and
+    the vehicle x length table when there are several lengths."""
     for duration, results in by_length.items():
         results.sort(key=lambda r: r["seed"])
         print(f"\n{duration:g} s logs:")
         print(table(results))
-        if args.vehicles:
+        if vehicles:
             print()
             print(vehicle_table(results, vehicles))
-    if len(durations) > 1 and args.vehicles:
+    if len(by_length) > 1 and vehicles:
         print()
         print(length_table(by_length, vehicles))
-    print(f"\nwall time {time.perf_counter() - start:.0f} s", flush=True)
-    return 0
 
 
 if __name__ == "__main__":

@@ -13,7 +13,11 @@ given and the frames it produced -- and then, with PyBullet out of the loop, rep
 Before the timed passes it also reports the Lindgren EKF's one-off costs in this process:
 importing it (numba included) and its first frame, which loads the compiled code from numba's
 on-disk cache, or compiles it when the cache is cold (the first run after an install or an
-edit of the filter's source; run twice to see both).
+edit of the filter's source; run twice to see both). And the compiled code's heap allocations
+per frame of FarmField-v0's filter (numba's allocation statistics, in a fresh interpreter with
+``NUMBA_NRT_STATS=1``): the frame kernel's models write into the filter's workspace, so the
+count is the floor of one per array argument of ``filter_frame``, which the dispatcher wraps
+(10); a model that allocates again raises it.
 
 Each cost is the median over ``--repeats`` passes of (time for the whole pass) / (frames), in
 microseconds per control step, and next to it the fastest pass (on a loaded machine, the closer
@@ -125,6 +129,46 @@ def lindgren_startup() -> dict[str, float]:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+_ALLOCATIONS = """
+import json
+import numpy as np
+from numba.core.runtime import rtsys
+from slipenv.contracts.frame import SensorFrame
+from slipenv.estimators.base import OdometryGeometry
+from slipenv.estimators.lindgren.ekf import LindgrenEKF, LindgrenNoise
+ekf = LindgrenEKF(OdometryGeometry(wheel_radius_m=0.275, track_width_m=1.5, counts_per_rad=285.0),
+                  4, params=LindgrenNoise(lateral_slip_sigma0=3.0),
+                  beacons_xy=np.array([[10.0, 0.0], [0.0, 10.0], [-10.0, 0.0]]))
+def frame(k):
+    t = 0.05 * k
+    return SensorFrame(t_s=t, enc_counts=np.array([2.0, 2.1]) * k,
+                       wheel_torque_nm=np.array([40.0, 42.0]), gyro_z_rad_s=0.01,
+                       acc_x_mps2=0.0, acc_y_mps2=0.0, pitch_rad=0.0, roll_rad=0.0,
+                       beacon_bearings_rad=np.array([0.1, 1.6]),
+                       beacon_times_s=np.array([t - 0.03, t - 0.01]))
+ekf.reset(0.0, 0.0, 0.0, frame(0))
+for k in range(1, 20):
+    ekf.update(frame(k))
+before = rtsys.get_allocation_stats().alloc
+for k in range(20, 120):
+    ekf.update(frame(k))
+print(json.dumps({"per_frame": (rtsys.get_allocation_stats().alloc - before) / 100}))
+"""
+
+
+def lindgren_allocations() -> float:
+    """In a fresh interpreter with numba's allocation statistics on: heap allocations of the
+    compiled code per frame of FarmField-v0's filter (scheme 4 with the lateral slip gain;
+    two bearings, every sensor)."""
+    import os
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", _ALLOCATIONS], capture_output=True, text=True,
+                          check=True, env={**os.environ, "NUMBA_NRT_STATS": "1"})
+    return json.loads(done.stdout.strip().splitlines()[-1])["per_frame"]
+
+
 def time_estimator(make: Callable[[], object], frames, pose0) -> float:
     est = make()
     est.reset(*pose0, frames[0])  # type: ignore[attr-defined]
@@ -148,6 +192,7 @@ def time_sensors(suite: SensorSuite, truths) -> float:
 def run(steps: int = 300, repeats: int = 7) -> dict:
     truths, frames, pose0, suite, spec, context = record(steps)
     startup = lindgren_startup()
+    allocations = lindgren_allocations()
     factories = estimator_factories(spec, context)
     samples: dict[str, list[float]] = {name: [] for name in ["sensors", *factories]}
     for _ in range(repeats):
@@ -159,6 +204,7 @@ def run(steps: int = 300, repeats: int = 7) -> dict:
         "env": ENV_ID, "frames": len(frames) - 1, "repeats": repeats,
         "bearings_per_step": round(n_bearings / (len(frames) - 1), 2),
         "lindgren_startup_s": startup,
+        "lindgren_allocations_per_frame": allocations,
         "us_per_step": {k: round(1e6 * statistics.median(v), 1) for k, v in samples.items()},
         "us_per_step_min": {k: round(1e6 * min(v), 1) for k, v in samples.items()},
     }
@@ -176,6 +222,8 @@ def main(argv: list[str] | None = None) -> None:
     st = result["lindgren_startup_s"]
     print(f"Lindgren EKF in a fresh interpreter: import {st['import_s']} s, first frame "
           f"{st['first_frame_s']} s (loads the compiled code from numba's cache, or compiles)")
+    print(f"Lindgren EKF heap allocations per frame: {result['lindgren_allocations_per_frame']:g}"
+          " (the floor: 10, filter_frame's array arguments)")
     print(f"{'component':<26} {'us / control step':>18} {'fastest pass':>13}")
     for name, us in result["us_per_step"].items():
         print(f"{name:<26} {us:>18.1f} {result['us_per_step_min'][name]:>13.1f}")

@@ -51,10 +51,20 @@ SENSORS = ("gyro", "acc", "tilt", "odo", "bearing")  # keys of LindgrenEKF.histo
 _NO_BEACONS = np.zeros((0, 2))
 _NO_BEARINGS = np.zeros(0)
 _F64 = np.dtype(np.float64)
+_IX, _IY, _ITH, _IV, _IOM, _IA2 = lm.IX, lm.IY, lm.ITH, lm.IV, lm.IOM, lm.IA2
+_IRL, _IRR, _IKL, _IKR = lm.IRL, lm.IRR, lm.IKL, lm.IKR
+_N_OUT = kernel.N_OUT
 _OUT_SENSORS = (("gyro", kernel.OUT_GYRO, 1), ("acc", kernel.OUT_ACC, 2),
                 ("tilt", kernel.OUT_TILT, 2), ("odo", kernel.OUT_ODO, 2))
 _ODO_SKIPS = {kernel.INVALID_SOIL: "odo_invalid_soil", kernel.TORQUE_NAN: "torque_nan",
               kernel.SLIP_OUT_OF_RANGE: "slip_out_of_range"}
+
+
+def _status(out: np.ndarray, m: int) -> list[int]:
+    """The status codes of a frame with m bearings from the kernel's ``out``: bearings, then
+    gyro, accelerometers, inclinometer, odometers."""
+    at = 2 * m + kernel.N_OUT_FIXED
+    return [int(code) for code in out[at:at + m + 4].tolist()]
 
 
 def compiled_available() -> bool:
@@ -166,7 +176,14 @@ class LindgrenEKF:
         self.n = n_soil + self.lateral_slip
         self.state_names = lm.state_names(self.n)
         p = self.params
-        cfg = np.empty(kernel.N_CFG)
+        if not self.uses_odometry:
+            odo_mode = -1
+        elif not self.slip_model:
+            odo_mode = 0
+        else:
+            odo_mode = 1
+        soil = lo.NO_SOIL if oracle is None else oracle.as_array()
+        cfg = np.empty(kernel.N_CFG + len(soil))
         cfg[[kernel.C_JERK_V, kernel.C_JERK_W, kernel.C_TILT_PSD, kernel.C_RADIUS_VAR,
              kernel.C_KS_VAR]] = (p.jerk_psd_v, p.jerk_psd_omega, p.tilt_psd,
                                   p.radius_var_per_m, p.k_s_rel_var_per_m)
@@ -180,15 +197,11 @@ class LindgrenEKF:
         cfg[kernel.C_MAX_SLIP] = p.max_slip
         cfg[kernel.C_B_VAR] = p.inv_shape_var_per_m
         cfg[kernel.C_KBETA_VAR] = p.lateral_slip_var_per_m
+        cfg[kernel.C_INERTIAL] = float(self.uses_exteroceptive)
+        cfg[kernel.C_ODO_MODE] = odo_mode
+        cfg[kernel.N_CFG:] = soil
         self._cfg = cfg
-        self._soil = lo.NO_SOIL if oracle is None else oracle.as_array()
         self._beacons = _NO_BEACONS if beacons_xy is None else np.ascontiguousarray(beacons_xy)
-        if not self.uses_odometry:
-            self._odo_mode = -1
-        elif not self.slip_model:
-            self._odo_mode = 0
-        else:
-            self._odo_mode = 1
         self._left, self._right = list(geometry.left), list(geometry.right)
         # one wheel per side (the farm vehicle): read it directly, without averaging
         self._single = (self._left[0], self._right[0]) if len(self._left) == len(
@@ -203,7 +216,6 @@ class LindgrenEKF:
             r_w, k_s = (geometry.wheel_radius_m,) * 2, (math.nan, math.nan)
         self._fixed_soil_extras = {"R_wl_m": float(r_w[0]), "R_wr_m": float(r_w[1]),
                                    "k_sl": float(k_s[0]), "k_sr": float(k_s[1])}
-        self._status = np.empty(8, dtype=np.int64)  # status codes of a frame's measurements
         # the compiled predictions' and updates' temporaries, reused from frame to frame
         self._work = np.empty(kernel.work_size(self.n))
         self._iwork = np.empty(kernel.iwork_size(self.n), dtype=np.int64)
@@ -266,7 +278,7 @@ class LindgrenEKF:
         return self.estimate()
 
     def _clear_history(self) -> None:
-        self._frames: list[tuple[float, np.ndarray, list[int], np.ndarray]] = []
+        self._frames: list[tuple[float, np.ndarray, np.ndarray]] = []
         self._history: dict[str, list[tuple[float, np.ndarray, np.ndarray]]] = {
             s: [] for s in SENSORS}
         self._n_history = 0  # frames expanded into _history
@@ -276,12 +288,33 @@ class LindgrenEKF:
     def update(self, frame: SensorFrame) -> PoseEstimate:
         """Predict to the frame, fusing its bearings at their own times on the way, then update
         with the inertial sensors, inclinometer and odometers at the frame time."""
+        # This runs at every control step of an env: the usual frame (one wheel per side,
+        # numpy arrays, bearings in order) takes the shortest way through, anything else the
+        # checks and conversions of the helpers below, with the same result.
         t_prev = self._t
         if t_prev is None:
             raise RuntimeError("LindgrenEKF.update called before reset")
-        tau = check_frame_time(t_prev, frame)
         t = float(frame.t_s)
-        counts = self._side_counts(frame) if self.uses_odometry else self._counts
+        if not t_prev < t < math.inf:
+            check_frame_time(t_prev, frame)  # raises: not finite, or not after the last frame
+        enc, trq = frame.enc_counts, frame.wheel_torque_nm
+        single = self._single
+        if (single is not None and type(enc) is np.ndarray and type(trq) is np.ndarray
+                and enc.ndim == 1 and trq.ndim == 1 and len(enc) >= self._min_wheels
+                and len(trq) >= self._min_wheels):
+            i, j = single
+            tq = trq.tolist()
+            torque = float(tq[i]), float(tq[j])
+            if self.uses_odometry:
+                c = enc.tolist()
+                counts = float(c[i]), float(c[j])
+                if not (math.isfinite(counts[0]) and math.isfinite(counts[1])):
+                    self._side_counts(frame)  # raises with the counts
+            else:
+                counts = self._counts
+        else:
+            counts = self._side_counts(frame) if self.uses_odometry else self._counts
+            torque = self._side_torque(frame)
         n_bad = 0
         if self.uses_exteroceptive:
             bearing_z, bearing_t = frame.beacon_bearings_rad, frame.beacon_times_s
@@ -292,28 +325,25 @@ class LindgrenEKF:
                 bearing_t, bearing_z, n_bad = self._frame_bearings(frame)
         else:
             bearing_t = bearing_z = _NO_BEARINGS
-        torque = self._side_torque(frame)
         (a0, a1), (b0, b1) = self._torque, torque
         t_bar_l = 0.5 * (a0 + b0) if math.isfinite(a0) else b0  # mean torque over the interval
         t_bar_r = 0.5 * (a1 + b1) if math.isfinite(a1) else b1
-        dcount_l, dcount_r = counts[0] - self._counts[0], counts[1] - self._counts[1]
+        c0, c1 = self._counts
         # Python floats: numba's dispatcher types them faster than numpy scalars
         gyro, acc_x, acc_y = (float(frame.gyro_z_rad_s), float(frame.acc_x_mps2),
                               float(frame.acc_y_mps2))
         pitch, roll = float(frame.pitch_rad), float(frame.roll_rad)
         for attempt in range(2):
             m = len(bearing_t)
-            if m + 4 > len(self._status):
-                self._status = np.empty(m + 4, dtype=np.int64)
-            out = np.empty(2 * m + kernel.N_OUT_FIXED)  # the history keeps views into it
+            out = np.empty(3 * m + _N_OUT)  # the history keeps views into it
+            cov = np.empty((3, 3))
             # The kernel works in place on copies: a frame that fails leaves x and P as they
             # were.
             x, P = self.x.copy(), self.P.copy()
             t_state = kernel.filter_frame(
-                x, P, self._t_state, self._cfg, self._soil, self._beacons, bearing_t,
-                bearing_z, t_prev, t, self.uses_exteroceptive, gyro, acc_x, acc_y, pitch, roll,
-                self._odo_mode, tau, dcount_l, dcount_r, t_bar_l, t_bar_r, self._status, out,
-                self._work, self._iwork)
+                x, P, self._t_state, self._cfg, self._beacons, bearing_t, bearing_z, t_prev, t,
+                gyro, acc_x, acc_y, pitch, roll, counts[0] - c0, counts[1] - c1, t_bar_l,
+                t_bar_r, out, cov, self._work, self._iwork)
             if t_state == t_state:
                 break
             if attempt:  # never: _frame_bearings returns what the kernel accepts
@@ -322,13 +352,12 @@ class LindgrenEKF:
             bearing_t, bearing_z, n_bad = self._frame_bearings(frame)
         self.x, self.P, self._t_state = x, P, t_state
         self._t, self._counts, self._torque = t, counts, torque
-        status = self._status.tolist()[:m + 4]
-        self._frames.append((t, bearing_t, status, out))
-        if status.count(kernel.ACCEPTED) == m + self._n_sensors and not n_bad:
+        self._frames.append((t, bearing_t, out))
+        if out[-1] == m + self._n_sensors and not n_bad:  # all accepted
             self._n_bearings_used += m
         else:
-            self._count_skips(m, status, n_bad)
-        return self.estimate()
+            self._count_skips(m, _status(out, m), n_bad)
+        return self._estimate(cov)
 
     def _count_skips(self, m: int, status: list[int], n_bad: int) -> None:
         """Count the frame's skipped measurements by reason (status codes of
@@ -355,8 +384,9 @@ class LindgrenEKF:
         Built on demand from the frames' raw kernel outputs (views into them), so a filter
         whose history nobody reads does not pay for it."""
         hist = self._history
-        for t, bearing_t, status, out in self._frames[self._n_history:]:
+        for t, bearing_t, out in self._frames[self._n_history:]:
             m = len(bearing_t)
+            status = _status(out, m)
             for j in range(m):
                 if status[j] == kernel.ACCEPTED:
                     hist["bearing"].append((float(bearing_t[j]), out[2 * j:2 * j + 1],
@@ -385,11 +415,15 @@ class LindgrenEKF:
         ``okello_Bl``, ``okello_Br``), with a lateral slip state ``k_beta_rad_per_g`` and the
         ``slip_angle_rad`` β̂ it gives now (also the estimate's ``slip_angle_rad``), and the
         skip counts."""
+        return self._estimate(self.P[:3, :3].copy())
+
+    def _estimate(self, cov: np.ndarray) -> PoseEstimate:
+        """:meth:`estimate` with the covariance of the pose ``cov`` (3, 3), a new array."""
         xs = self.x.tolist()
+        v, omega = xs[_IV], xs[_IOM]
         extras: dict[str, object]
         if self.estimates_soil:
-            extras = {"R_wl_m": xs[lm.IRL], "R_wr_m": xs[lm.IRR],
-                      "k_sl": xs[lm.IKL], "k_sr": xs[lm.IKR]}
+            extras = {"R_wl_m": xs[_IRL], "R_wr_m": xs[_IRR], "k_sl": xs[_IKL], "k_sr": xs[_IKR]}
         else:
             extras = dict(self._fixed_soil_extras)
         slip_angle = 0.0
@@ -398,8 +432,7 @@ class LindgrenEKF:
                 extras[side] = 1.0 / b if b != 0.0 else math.inf
         if self.lateral_slip:
             k_beta = xs[-1]
-            slip_angle = math.atan(k_beta * self._lateral_accel_g(xs[lm.IV], xs[lm.IOM],
-                                                                  xs[lm.IA2]))
+            slip_angle = math.atan(k_beta * self._lateral_accel_g(v, omega, xs[_IA2]))
             extras["k_beta_rad_per_g"] = k_beta
             extras["slip_angle_rad"] = slip_angle
         skipped = self.skipped
@@ -407,9 +440,9 @@ class LindgrenEKF:
         extras["n_skipped"] = sum(skipped.values()) if skipped else 0
         extras["skipped"] = dict(skipped)
         # β̂ feeds a path follower's slip-angle feed-forward (Yamauchi Eq. 10); 0 without k_β.
-        # positional: the dataclass's __init__ takes them faster than keywords (~0.7 µs a step)
-        return PoseEstimate(xs[lm.IX], xs[lm.IY], xs[lm.ITH], xs[lm.IV], xs[lm.IOM],
-                            slip_angle, self.P[:3, :3].copy(), extras)
+        # construct: the frozen dataclass's __init__ cost ~2 µs a step
+        return PoseEstimate.construct(xs[_IX], xs[_IY], xs[_ITH], v, omega, slip_angle, cov,
+                                      extras)
 
     # -- input validation ----------------------------------------------------------------------
     def _side_counts(self, frame: SensorFrame) -> tuple[float, float]:

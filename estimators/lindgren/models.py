@@ -52,14 +52,26 @@ Departures from the paper, each for a stated reason:
   sideways by v τ Ω / 2 every step (6 mm per metre on Lindgren's 4 m circles at 20 Hz). To
   first order in τ the two are identical.
 * The paper's pitch-rate input u = α̇1 comes from a pitch gyro that ``SensorFrame`` does not
-  carry, so pitch and roll are random walks here, turned into each other through the heading
-  change as the vehicle yaws on a tilted plane (the coupling the paper applies to α2, here as
-  an exact rotation so that it stays bounded at any yaw rate), and observed by the
-  inclinometer when the frame has one.
+  carry, so pitch and roll follow a process model here, turned into each other through the
+  heading change as the vehicle yaws on a tilted plane (the coupling the paper applies to α2,
+  here as an exact rotation so that it stays bounded at any yaw rate), and observed by the
+  inclinometer when the frame has one. The process is the first-order Gauss-Markov one
+  (:func:`tilt_decay`) with the field's slope prior :data:`TILT_SIGMA_RAD` as its stationary
+  standard deviation, not a random walk: a field's tilt stays within its slope, and on a drive
+  without an inclinometer nothing else bounds its covariance. Measured on the reproduction's
+  straights without inertial sensors (a flat field), the random walk let the filters with the
+  lateral slip gain explain part of the crab by the tilt, which the 180° turns rotate into the
+  roll of ``a_y``: tilt states of several degrees for the slip models and tens of degrees for
+  the oracle with k_β, whose slip angle then ran away. The Gauss-Markov tilt lowers both, but
+  cannot stop a runaway driven through the product k_β α2 by a wrong soil model (the oracle's
+  k_s on the curved law).
 
 Speed: these functions are the code the filter runs. ``@njit(cache=True)`` compiles this same
 text with numba (the compiled machine code is cached in ``__pycache__``, so only the first run
 on a machine pays the compile); ``NUMBA_DISABLE_JIT=1`` runs it as the plain Python it reads as.
+Those the filter calls at every prediction have an ``_into`` twin that writes into an array the
+caller owns (the filter's workspace); the allocating function calls it, so each model is
+written once.
 """
 
 from __future__ import annotations
@@ -70,9 +82,16 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from slipenv.contracts import wrap_angle
+from slipenv.contracts import angles, wrap_angle
+from slipenv.contracts.compiled_cache import refresh_stale_cache
+
+refresh_stale_cache(__file__, angles.__file__)  # the models call the compiled wrap_angle
 
 G_MPS2 = 9.80665  # standard gravity [m/s²]; Eq. 14 accelerations are in units of g
+# [rad] the field's slope prior, the stationary std of pitch and roll (about 2.9°: a field a
+# farm vehicle works is within a few degrees of level; the filter's prior at reset,
+# LindgrenNoise.sigma0_tilt_rad, is the same belief)
+TILT_SIGMA_RAD = 0.05
 
 IX, IY, ITH, IV, IOM, IVD, IOMD, IA1, IA2 = range(9)
 IRL, IRR, IKL, IKR = 9, 10, 11, 12
@@ -148,7 +167,21 @@ def lateral_accel_g(v: float, omega: float, alpha2: float) -> float:
 
 
 @njit(cache=True)
-def process_fx(x: np.ndarray, tau: float) -> np.ndarray:
+def tilt_decay(tau: float, tilt_psd: float) -> float:
+    """Factor ``φ = exp(-τ q / (2 σ²))`` by which pitch and roll revert to level over τ.
+
+    The first-order Gauss-Markov process with stationary variance σ² = :data:`TILT_SIGMA_RAD` ²
+    whose short-time spectral density is q = ``tilt_psd``: over τ ≪ 2σ²/q it is the random walk
+    of density q, over longer times it stays within σ. Its discrete noise is σ² (1 - φ²)
+    (:func:`process_Q`; the first-order Gauss-Markov process of Brown and Hwang, Introduction
+    to Random Signals and Applied Kalman Filtering, ch. 2). With
+    q = 1e-4 rad²/s and σ = 0.05 rad the correlation time 2σ²/q is 50 s (25 m at 0.5 m/s).
+    """
+    return math.exp(-0.5 * tau * tilt_psd / (TILT_SIGMA_RAD * TILT_SIGMA_RAD))
+
+
+@njit(cache=True)
+def process_fx(x: np.ndarray, tau: float, tilt_psd: float) -> np.ndarray:
     """Predict the state τ seconds ahead (Lindgren Eq. 13, second-order integration).
 
     With a lateral slip gain k_β (the last entry of a 10, 14 or 16-state ``x``) the velocity
@@ -162,6 +195,9 @@ def process_fx(x: np.ndarray, tau: float) -> np.ndarray:
         State at the start of the interval (layout in the module docstring).
     tau : float
         Prediction interval [s].
+    tilt_psd : float
+        Pitch and roll spectral density [rad²/s]: sets how fast they revert to level
+        (:func:`tilt_decay`).
 
     Returns
     -------
@@ -169,7 +205,17 @@ def process_fx(x: np.ndarray, tau: float) -> np.ndarray:
         State at the end of the interval. θ is not wrapped (the filter wraps it), so the
         function stays smooth for finite differences. R_w, k_s, 1/B and k_β are constant.
     """
-    xp = x.copy()
+    xp = np.empty(x.shape[0])
+    process_fx_into(x, tau, tilt_psd, xp)
+    return xp
+
+
+@njit(cache=True)
+def process_fx_into(x: np.ndarray, tau: float, tilt_psd: float, xp: np.ndarray) -> None:
+    """:func:`process_fx` written into ``xp`` (n,), another array than ``x`` (the filter's
+    workspace, as :func:`process_F_into`)."""
+    for i in range(x.shape[0]):
+        xp[i] = x[i]
     v_bar = x[IV] + 0.5 * tau * x[IVD]  # mean speed over the interval [m/s]
     om_bar = x[IOM] + 0.5 * tau * x[IOMD]  # mean yaw rate [rad/s]
     dth = tau * om_bar  # heading change [rad]
@@ -186,23 +232,24 @@ def process_fx(x: np.ndarray, tau: float) -> np.ndarray:
     xp[ITH] = x[ITH] + dth
     xp[IV] = x[IV] + tau * x[IVD]
     xp[IOM] = x[IOM] + tau * x[IOMD]
-    # a fixed ground tilt seen from a yawing body: (α1, α2) turn through the heading change
-    cd, sd = math.cos(dth), math.sin(dth)
+    # a ground tilt seen from a yawing body: (α1, α2) turn through the heading change, and
+    # revert towards level as the vehicle moves over the field
+    phi = tilt_decay(tau, tilt_psd)
+    cd, sd = phi * math.cos(dth), phi * math.sin(dth)
     xp[IA1] = cd * x[IA1] - sd * x[IA2]
     xp[IA2] = sd * x[IA1] + cd * x[IA2]
-    return xp
 
 
 @njit(cache=True)
-def process_F(x: np.ndarray, tau: float) -> np.ndarray:
+def process_F(x: np.ndarray, tau: float, tilt_psd: float) -> np.ndarray:
     """Jacobian ``F = ∂f/∂x`` of :func:`process_fx` (Lindgren Eq. 7), shape (n, n)."""
     F = np.empty((x.shape[0], x.shape[0]))
-    process_F_into(x, tau, F)
+    process_F_into(x, tau, F, tilt_psd)
     return F
 
 
 @njit(cache=True)
-def process_F_into(x: np.ndarray, tau: float, F: np.ndarray) -> None:
+def process_F_into(x: np.ndarray, tau: float, F: np.ndarray, tilt_psd: float) -> None:
     """:func:`process_F` written into ``F`` (n, n), for the filter's per-frame workspace: the
     filter predicts a few times per frame, where allocating costs as much as the arithmetic."""
     n = x.shape[0]
@@ -252,7 +299,8 @@ def process_F_into(x: np.ndarray, tau: float, F: np.ndarray) -> None:
     F[ITH, IOMD] = 0.5 * tau * tau
     F[IV, IVD] = tau
     F[IOM, IOMD] = tau
-    cd, sd = math.cos(dth), math.sin(dth)
+    phi = tilt_decay(tau, tilt_psd)
+    cd, sd = phi * math.cos(dth), phi * math.sin(dth)
     F[IA1, IA1] = cd
     F[IA1, IA2] = -sd
     F[IA2, IA1] = sd
@@ -282,13 +330,22 @@ def jerk_block(tau: float, psd: float) -> np.ndarray:
     -------
     np.ndarray, shape (3, 3)
     """
+    q00, q01, q02, q11, q12, q22 = jerk_entries(tau, psd)
+    q = np.empty((3, 3))
+    q[0, 0], q[0, 1], q[0, 2] = q00, q01, q02
+    q[1, 0], q[1, 1], q[1, 2] = q01, q11, q12
+    q[2, 0], q[2, 1], q[2, 2] = q02, q12, q22
+    return q
+
+
+@njit(cache=True)
+def jerk_entries(tau: float, psd: float) -> tuple[float, float, float, float, float, float]:
+    """The upper triangle of :func:`jerk_block`, ``(q00, q01, q02, q11, q12, q22)``: the form
+    :func:`process_Q_into` takes it in, without an array to allocate at every prediction."""
     t2 = tau * tau
     t3 = t2 * tau
-    q = np.empty((3, 3))
-    q[0, 0], q[0, 1], q[0, 2] = psd * t3 * t2 / 20.0, psd * t2 * t2 / 8.0, psd * t3 / 6.0
-    q[1, 1], q[1, 2], q[2, 2] = psd * t3 / 3.0, psd * t2 / 2.0, psd * tau
-    q[1, 0], q[2, 0], q[2, 1] = q[0, 1], q[0, 2], q[1, 2]
-    return q
+    return (psd * t3 * t2 / 20.0, psd * t2 * t2 / 8.0, psd * t3 / 6.0, psd * t3 / 3.0,
+            psd * t2 / 2.0, psd * tau)
 
 
 @njit(cache=True)
@@ -306,7 +363,8 @@ def process_Q(
     """Process noise covariance ``Q`` over τ (Lindgren Eq. 7 and the end of §4).
 
     White jerk drives the (along-track distance, v, v̇) and (θ, Ω, Ω̇) chains; the distance
-    noise is laid along the mean heading in (x, y). Pitch and roll are random walks. For the
+    noise is laid along the mean heading in (x, y). Pitch and roll are Gauss-Markov processes
+    with stationary variance σ² (:func:`tilt_decay`): σ² (1 - φ²) each. For the
     slip models the variances of R_w and k_s (and Okello's 1/B, and k_β) grow in proportion to
     the distance travelled in the interval, ``d = |v + τ v̇/2| τ`` (Lindgren §4: "increasing
     their corresponding variances ... in proportion to the distance travelled"); k_s's growth
@@ -324,7 +382,7 @@ def process_Q(
     jerk_psd_omega : float
         Yaw jerk spectral density [rad²/s⁵].
     tilt_psd : float
-        Pitch and roll random-walk spectral density [rad²/s].
+        Pitch and roll spectral density [rad²/s] (short-time random walk, :func:`tilt_decay`).
     radius_var_per_m : float
         Growth of each R_w variance per metre travelled [m²/m].
     k_s_rel_var_per_m : float
@@ -368,23 +426,22 @@ def process_Q_into(
     v_bar = x[IV] + 0.5 * tau * x[IVD]
     th_mid = x[ITH] + 0.5 * tau * (x[IOM] + 0.5 * tau * x[IOMD])
     u = (math.cos(th_mid), math.sin(th_mid))
-    qv = jerk_block(tau, jerk_psd_v)
-    qw = jerk_block(tau, jerk_psd_omega)
-    yaw = (ITH, IOM, IOMD)  # the (θ, Ω, Ω̇) chain
-    for a in range(3):
-        for b in range(3):
-            Q[yaw[a], yaw[b]] = qw[a, b]
+    w00, w01, w02, w11, w12, w22 = jerk_entries(tau, jerk_psd_omega)
+    # the (θ, Ω, Ω̇) chain
+    Q[ITH, ITH], Q[ITH, IOM], Q[ITH, IOMD] = w00, w01, w02
+    Q[IOM, ITH], Q[IOM, IOM], Q[IOM, IOMD] = w01, w11, w12
+    Q[IOMD, ITH], Q[IOMD, IOM], Q[IOMD, IOMD] = w02, w12, w22
     # the along-track chain (s, v, v̇), with the distance s laid along u in (x, y)
-    speed = (IV, IVD)
-    for a in range(2):
-        for b in range(2):
-            Q[speed[a], speed[b]] = qv[1 + a, 1 + b]
+    v00, v01, v02, v11, v12, v22 = jerk_entries(tau, jerk_psd_v)
+    Q[IV, IV], Q[IV, IVD], Q[IVD, IV], Q[IVD, IVD] = v11, v12, v12, v22
     for i in range(2):
         for j in range(2):
-            Q[i, j] = qv[0, 0] * u[i] * u[j]
-        for b in range(2):
-            Q[i, speed[b]] = Q[speed[b], i] = qv[0, 1 + b] * u[i]
-    Q[IA1, IA1] = Q[IA2, IA2] = tilt_psd * tau
+            Q[i, j] = v00 * u[i] * u[j]
+        Q[i, IV] = Q[IV, i] = v01 * u[i]
+        Q[i, IVD] = Q[IVD, i] = v02 * u[i]
+    # σ² (1 - φ²), without the cancellation of 1 - φ² at short τ
+    sig2 = TILT_SIGMA_RAD * TILT_SIGMA_RAD
+    Q[IA1, IA1] = Q[IA2, IA2] = -sig2 * math.expm1(-tau * tilt_psd / sig2)
     d = abs(v_bar) * tau
     base = soil_size(n)
     if base >= N_SLIP:

@@ -23,7 +23,10 @@ Like :mod:`.models`, these functions are the code the filter runs, compiled from
 numba (``@njit(cache=True)``). The oracle's fixed soil is passed to the slip model as the array
 ``[R_wl, R_wr, k_sl, k_sr]`` (:meth:`.models.OracleSoil.as_array`) because compiled code takes
 arrays, not dataclasses. They are written per wheel in plain loops rather than as numpy array
-expressions: numba compiles loops several times faster.
+expressions: numba compiles loops several times faster. Those the filter calls at every frame
+have an ``_into`` twin writing into arrays the caller owns (the filter's workspace), or a
+per-wheel or per-beacon scalar form; the allocating function calls it, so each model is
+written once.
 """
 
 from __future__ import annotations
@@ -32,6 +35,9 @@ import math
 
 import numpy as np
 from numba import njit
+
+from slipenv.contracts import angles
+from slipenv.contracts.compiled_cache import refresh_stale_cache
 
 from .models import (
     G_MPS2,
@@ -55,7 +61,17 @@ from .models import (
     wrap,
 )
 
+# the observation models call the models' compiled functions
+refresh_stale_cache(__file__, "models.py", angles.__file__)
+
 NO_SOIL = np.zeros(0)  # the ``soil`` argument of the slip models whose soil is in x
+
+
+@njit(cache=True)
+def _zero(H: np.ndarray) -> None:
+    for a in range(H.shape[0]):
+        for k in range(H.shape[1]):
+            H[a, k] = 0.0
 
 
 # ---------------------------------------------------------------------------------------------
@@ -71,23 +87,36 @@ def ins_hx(x: np.ndarray) -> np.ndarray:
         Forward and lateral specific force [g] and yaw rate [rad/s].
     """
     h = np.empty(3)
+    ins_hx_into(x, h)
+    return h
+
+
+@njit(cache=True)
+def ins_hx_into(x: np.ndarray, h: np.ndarray) -> None:
+    """:func:`ins_hx` written into ``h`` (3,)."""
     h[0] = x[IVD] / G_MPS2 + x[IA1]
     h[1] = x[IV] * x[IOM] / G_MPS2 - x[IA2]
     h[2] = x[IOM]
-    return h
 
 
 @njit(cache=True)
 def ins_H(x: np.ndarray) -> np.ndarray:
     """Jacobian of :func:`ins_hx`, shape (3, n)."""
-    H = np.zeros((3, x.shape[0]))
+    H = np.empty((3, x.shape[0]))
+    ins_H_into(x, H)
+    return H
+
+
+@njit(cache=True)
+def ins_H_into(x: np.ndarray, H: np.ndarray) -> None:
+    """:func:`ins_H` written into ``H`` (3, n)."""
+    _zero(H)
     H[0, IVD] = 1.0 / G_MPS2
     H[0, IA1] = 1.0
     H[1, IV] = x[IOM] / G_MPS2
     H[1, IOM] = x[IV] / G_MPS2
     H[1, IA2] = -1.0
     H[2, IOM] = 1.0
-    return H
 
 
 @njit(cache=True)
@@ -96,15 +125,30 @@ def tilt_hx(x: np.ndarray) -> np.ndarray:
 
     ``SensorFrame`` reports ``pitch_rad = -α1`` and ``roll_rad = -α2`` (REP 103).
     """
-    return x[IA1:IA2 + 1].copy()
+    h = np.empty(2)
+    tilt_hx_into(x, h)
+    return h
+
+
+@njit(cache=True)
+def tilt_hx_into(x: np.ndarray, h: np.ndarray) -> None:
+    """:func:`tilt_hx` written into ``h`` (2,)."""
+    h[0], h[1] = x[IA1], x[IA2]
 
 
 @njit(cache=True)
 def tilt_H(x: np.ndarray) -> np.ndarray:
     """Jacobian of :func:`tilt_hx`, shape (2, n)."""
-    H = np.zeros((2, x.shape[0]))
-    H[0, IA1] = H[1, IA2] = 1.0
+    H = np.empty((2, x.shape[0]))
+    tilt_H_into(x, H)
     return H
+
+
+@njit(cache=True)
+def tilt_H_into(x: np.ndarray, H: np.ndarray) -> None:
+    """:func:`tilt_H` written into ``H`` (2, n)."""
+    _zero(H)
+    H[0, IA1] = H[1, IA2] = 1.0
 
 
 # ---------------------------------------------------------------------------------------------
@@ -116,12 +160,19 @@ SIDES = (-1.0, 1.0)  # the ∓ of Eq. 16: left wheel -W/2 Ω, right wheel +W/2 �
 @njit(cache=True)
 def wheel_speeds(x: np.ndarray, tau: float, track_width_m: float) -> np.ndarray:
     """Mean ground speed of the (left, right) wheel over the interval ending at x [m/s]."""
-    v_mid = x[IV] - 0.5 * tau * x[IVD]
-    om_mid = x[IOM] - 0.5 * tau * x[IOMD]
     v_w = np.empty(2)
     for i in range(2):
-        v_w[i] = v_mid + SIDES[i] * (0.5 * track_width_m) * om_mid
+        v_w[i] = wheel_speed(x, tau, track_width_m, i)
     return v_w
+
+
+@njit(cache=True)
+def wheel_speed(x: np.ndarray, tau: float, track_width_m: float, i: int) -> float:
+    """:func:`wheel_speeds` of wheel i (0 left, 1 right): ``v ∓ W Ω / 2`` (Lindgren Eq. 16)
+    at the interval's mean v and Ω [m/s]."""
+    v_mid = x[IV] - 0.5 * tau * x[IVD]
+    om_mid = x[IOM] - 0.5 * tau * x[IOMD]
+    return v_mid + SIDES[i] * (0.5 * track_width_m) * om_mid
 
 
 @njit(cache=True)
@@ -156,11 +207,17 @@ def odo_hx(
     np.ndarray, shape (2,)
         Counts of the (left, right) wheel over the interval.
     """
-    v_w = wheel_speeds(x, tau, track_width_m)
     z = np.empty(2)
-    for i in range(2):
-        z[i] = tau * counts_per_rad / radius_m * v_w[i]
+    odo_hx_into(x, tau, radius_m, track_width_m, counts_per_rad, z)
     return z
+
+
+@njit(cache=True)
+def odo_hx_into(x: np.ndarray, tau: float, radius_m: float, track_width_m: float,
+                counts_per_rad: float, z: np.ndarray) -> None:
+    """:func:`odo_hx` written into ``z`` (2,)."""
+    for i in range(2):
+        z[i] = tau * counts_per_rad / radius_m * wheel_speed(x, tau, track_width_m, i)
 
 
 @njit(cache=True)
@@ -168,14 +225,22 @@ def odo_H(
     x: np.ndarray, tau: float, radius_m: float, track_width_m: float, counts_per_rad: float
 ) -> np.ndarray:
     """Jacobian of :func:`odo_hx`, shape (2, n)."""
-    H = np.zeros((2, x.shape[0]))
+    H = np.empty((2, x.shape[0]))
+    odo_H_into(x, tau, radius_m, track_width_m, counts_per_rad, H)
+    return H
+
+
+@njit(cache=True)
+def odo_H_into(x: np.ndarray, tau: float, radius_m: float, track_width_m: float,
+               counts_per_rad: float, H: np.ndarray) -> None:
+    """:func:`odo_H` written into ``H`` (2, n)."""
+    _zero(H)
     g = tau * counts_per_rad / radius_m
     for i in range(2):
         H[i, IV] = g
         H[i, IOM] = g * SIDES[i] * 0.5 * track_width_m
         H[i, IVD] = -0.5 * tau * H[i, IV]
         H[i, IOMD] = -0.5 * tau * H[i, IOM]
-    return H
 
 
 @njit(cache=True)
@@ -296,17 +361,22 @@ def slip_model(x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: flo
     ds_db : np.ndarray, shape (2,)
         ∂s/∂b (zero for the linear law).
     """
-    _, k_s = slip_params(x, soil)
-    v_w = wheel_speeds(x, tau, track_width_m)
-    okello = soil_size(x.shape[0]) == N_OKELLO
     s = np.empty(2)
     ds_dk = np.empty(2)
     ds_db = np.empty(2)
     for i in range(2):
-        s_lin = travel_sign(v_w[i]) * torque[i] / k_s[i]
-        s[i], ds_dk[i], ds_db[i] = slip_law(s_lin, k_s[i], x[IBL + i] if okello else 0.0,
-                                            okello)
+        s[i], ds_dk[i], ds_db[i] = wheel_slip_model(x, tau, torque, track_width_m, soil, i)
     return s, ds_dk, ds_db
+
+
+@njit(cache=True)
+def wheel_slip_model(x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: float,
+                     soil: np.ndarray, i: int) -> tuple[float, float, float]:
+    """:func:`slip_model` of wheel i (0 left, 1 right): its slip s, ∂s/∂k_s and ∂s/∂b."""
+    _, k_s = slip_params(x, soil)
+    okello = soil_size(x.shape[0]) == N_OKELLO
+    s_lin = travel_sign(wheel_speed(x, tau, track_width_m, i)) * torque[i] / k_s[i]
+    return slip_law(s_lin, k_s[i], x[IBL + i] if okello else 0.0, okello)
 
 
 @njit(cache=True)
@@ -365,13 +435,20 @@ def odo_slip_hx(
     np.ndarray, shape (2,)
         Counts over the interval. Meaningful only while the slip is below 1.
     """
-    r_w, _ = slip_params(x, soil)
-    v_w = wheel_speeds(x, tau, track_width_m)
-    s = slip_model(x, tau, torque, track_width_m, soil)[0]
     z = np.empty(2)
-    for i in range(2):
-        z[i] = tau * counts_per_rad * v_w[i] / (r_w[i] * (1.0 - s[i]))
+    odo_slip_hx_into(x, tau, torque, track_width_m, counts_per_rad, soil, z)
     return z
+
+
+@njit(cache=True)
+def odo_slip_hx_into(x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: float,
+                     counts_per_rad: float, soil: np.ndarray, z: np.ndarray) -> None:
+    """:func:`odo_slip_hx` written into ``z`` (2,)."""
+    r_w, _ = slip_params(x, soil)
+    for i in range(2):
+        v_w = wheel_speed(x, tau, track_width_m, i)
+        s = wheel_slip_model(x, tau, torque, track_width_m, soil, i)[0]
+        z[i] = tau * counts_per_rad * v_w / (r_w[i] * (1.0 - s))
 
 
 @njit(cache=True)
@@ -385,26 +462,32 @@ def odo_slip_H(
     (-τ/2 times Eq. 38-39); R_w and k_s (only when they are states) are Eq. 40-41, the latter
     through ``∂z/∂s ∂s/∂k_s``, as is the column of Okello's 1/B.
     """
+    H = np.empty((2, x.shape[0]))
+    odo_slip_H_into(x, tau, torque, track_width_m, counts_per_rad, soil, H)
+    return H
+
+
+@njit(cache=True)
+def odo_slip_H_into(x: np.ndarray, tau: float, torque: np.ndarray, track_width_m: float,
+                    counts_per_rad: float, soil: np.ndarray, H: np.ndarray) -> None:
+    """:func:`odo_slip_H` written into ``H`` (2, n)."""
     r_w, _ = slip_params(x, soil)
-    v_w = wheel_speeds(x, tau, track_width_m)
-    s, ds_dk, ds_db = slip_model(x, tau, torque, track_width_m, soil)
-    n = x.shape[0]
-    base = soil_size(n)
-    H = np.zeros((2, n))
+    base = soil_size(x.shape[0])
+    _zero(H)
     for i in range(2):
-        dz_dvw = tau * counts_per_rad / (r_w[i] * (1.0 - s[i]))  # Eq. 38
+        s, ds_dk, ds_db = wheel_slip_model(x, tau, torque, track_width_m, soil, i)
+        dz_dvw = tau * counts_per_rad / (r_w[i] * (1.0 - s))  # Eq. 38
         H[i, IV] = dz_dvw
         H[i, IOM] = dz_dvw * SIDES[i] * 0.5 * track_width_m  # Eq. 39
         H[i, IVD] = -0.5 * tau * H[i, IV]
         H[i, IOMD] = -0.5 * tau * H[i, IOM]
         if base >= N_SLIP:
-            z = dz_dvw * v_w[i]
-            dz_ds = z / (1.0 - s[i])
+            z = dz_dvw * wheel_speed(x, tau, track_width_m, i)
+            dz_ds = z / (1.0 - s)
             H[i, IRL + i] = -z / r_w[i]  # Eq. 40
-            H[i, IKL + i] = dz_ds * ds_dk[i]  # Eq. 41
+            H[i, IKL + i] = dz_ds * ds_dk  # Eq. 41
             if base == N_OKELLO:
-                H[i, IBL + i] = dz_ds * ds_db[i]
-    return H
+                H[i, IBL + i] = dz_ds * ds_db
 
 
 # ---------------------------------------------------------------------------------------------
@@ -427,18 +510,31 @@ def bearing_hx(x: np.ndarray, beacons_xy: np.ndarray) -> np.ndarray:
     """
     h = np.empty(beacons_xy.shape[0])
     for j in range(beacons_xy.shape[0]):
-        h[j] = wrap(math.atan2(beacons_xy[j, 1] - x[IY], beacons_xy[j, 0] - x[IX]) - x[ITH])
+        h[j] = bearing_to(x, beacons_xy[j, 0], beacons_xy[j, 1])
     return h
+
+
+@njit(cache=True)
+def bearing_to(x: np.ndarray, beacon_x: float, beacon_y: float) -> float:
+    """:func:`bearing_hx` of one beacon at (``beacon_x``, ``beacon_y``) [rad]."""
+    return wrap(math.atan2(beacon_y - x[IY], beacon_x - x[IX]) - x[ITH])
 
 
 @njit(cache=True)
 def bearing_H(x: np.ndarray, beacon_xy: np.ndarray) -> np.ndarray:
     """Jacobian of :func:`bearing_hx` for one beacon ``[X_b, Y_b]``, shape (1, n)."""
+    H = np.empty((1, x.shape[0]))
+    bearing_H_into(x, beacon_xy, H)
+    return H
+
+
+@njit(cache=True)
+def bearing_H_into(x: np.ndarray, beacon_xy: np.ndarray, H: np.ndarray) -> None:
+    """:func:`bearing_H` written into ``H`` (1, n)."""
     dx, dy = beacon_xy[0] - x[IX], beacon_xy[1] - x[IY]
     r2 = dx * dx + dy * dy
-    H = np.zeros((1, x.shape[0]))
+    _zero(H)
     H[0, IX], H[0, IY], H[0, ITH] = dy / r2, -dx / r2, -1.0
-    return H
 
 
 @njit(cache=True)
@@ -466,10 +562,9 @@ def nearest_beacon(x: np.ndarray, z: float, beacons_xy: np.ndarray) -> tuple[int
     y : float
         Its innovation ``wrap(z - h_lz(x))`` [rad].
     """
-    h = bearing_hx(x, beacons_xy)
     best, y_best = 0, math.inf
-    for j in range(h.shape[0]):
-        y = bearing_residual(z, h[j])
+    for j in range(beacons_xy.shape[0]):
+        y = bearing_residual(z, bearing_to(x, beacons_xy[j, 0], beacons_xy[j, 1]))
         if abs(y) < abs(y_best):
             best, y_best = j, y
     return best, y_best

@@ -7,6 +7,8 @@ import math
 from dataclasses import dataclass, fields
 from enum import IntEnum
 
+from .models import TILT_SIGMA_RAD
+
 
 class Scheme(IntEnum):
     """The four EKF schemes of Lindgren §5, and scheme 5 (beyond the paper): scheme 4 with
@@ -60,7 +62,10 @@ class LindgrenNoise:
         Yaw jerk spectral density driving Ω̇ [rad²/s⁵] (chosen: 0.5, enough to follow the step
         in Ω at the start of a 4 m arc, about 0.25 rad/s, within a second).
     tilt_psd : float
-        Pitch and roll random walk [rad²/s] (chosen: 1e-4, 0.01 rad/√s of terrain change).
+        Pitch and roll spectral density [rad²/s] (chosen: 1e-4, 0.01 rad/√s of terrain
+        change): their short-time random walk; over longer times they stay within the field's
+        slope prior, reverting to level with correlation time 2σ²/q = 50 s
+        (:func:`.models.tilt_decay`, σ = :data:`.models.TILT_SIGMA_RAD`).
     radius_var_per_m : float
         Growth of R_w variance per metre travelled [m²/m] (chosen: 1e-6, 1 mm/√m).
     k_s_rel_var_per_m : float
@@ -79,7 +84,9 @@ class LindgrenNoise:
     sigma0_vdot_mps2, sigma0_omegadot_rps2 : float
         Prior std of the accelerations (start at 0) [m/s²], [rad/s²].
     sigma0_tilt_rad : float
-        Prior std of pitch and roll when the frame has no inclinometer reading [rad].
+        Prior std of pitch and roll when the frame has no inclinometer reading [rad] (the
+        field's slope prior, :data:`.models.TILT_SIGMA_RAD`, which the filter's tilt process
+        keeps as its stationary std).
     radius_rel_sigma0 : float
         Prior std of R_w relative to the nominal radius (5 %: 0.275 m ± 14 mm covers
         Lindgren's 0.283/0.287 m on soil).
@@ -127,7 +134,7 @@ class LindgrenNoise:
     sigma0_omega_rps: float = 0.05
     sigma0_vdot_mps2: float = 0.2
     sigma0_omegadot_rps2: float = 0.2
-    sigma0_tilt_rad: float = 0.05
+    sigma0_tilt_rad: float = TILT_SIGMA_RAD
     radius_rel_sigma0: float = 0.05
     k_s0: float = 2000.0
     k_s_rel_sigma0: float = 0.5

@@ -434,6 +434,17 @@ class Transfer:
         return bool(self.after.sum() > self.before.sum()
                     or 2 * int(np.sum(self.after > self.before)) >= self.after.size)
 
+    def materially_worse(self, min_drift: float) -> bool:
+        """True if the model predicts the held-out parts worse than the nominal model in
+        sum, or on half of them or more by a material amount: the position or heading drift
+        it adds there is ``min_drift`` of the distance or of the angle turned (a change the
+        gain rule would not count as a fix does not count as harm either)."""
+        pos = np.sqrt(3.0) * (self.pos_after - self.pos_before) / max(self.travel_m, 1e-9)
+        yaw = np.sqrt(3.0) * (self.yaw_after - self.yaw_before) / max(self.turned_rad, 1e-9)
+        harmed = np.maximum(pos, yaw) >= min_drift
+        return bool(self.after.sum() > self.before.sum()
+                    or 2 * int(np.sum(harmed)) >= self.after.size)
+
     def passes(self, min_gain: float, min_drift: float) -> bool:
         """Material transfer: the held-out error falls by ``min_gain`` overall and on most
         parts, and the model is material: the drift it removes, or the change it makes to
@@ -502,8 +513,14 @@ def fit_whole(problem: Problem, parts: Segments, effects: tuple[str, ...],
 
 
 def transfer(problem: Problem, parts: Segments, by: str, effects: tuple[str, ...],
-             start: dict | None = None) -> Transfer:
-    """Leave-one-part-out replays of ``parts`` (:func:`whole_parts`) by ``effects``."""
+             start: dict | None = None, on_segments: bool = False) -> Transfer:
+    """Leave-one-part-out replays of ``parts`` (:func:`whole_parts`) by ``effects``.
+
+    ``on_segments``: each held-out part is replayed by ``effects`` fitted the way the
+    short route names them, on ``problem``'s segments outside that part, instead of on the
+    other parts' whole paths."""
+    from slipenv.diagnose.fit import fit
+
     whole = Problem(parts, problem.heading_scale_m, problem.travel_m)
     n = len(parts)
     out = {k: np.zeros(n) for k in ("before", "after", "pos_before", "pos_after",
@@ -511,7 +528,8 @@ def transfer(problem: Problem, parts: Segments, by: str, effects: tuple[str, ...
     models, xs, scales = [], [], np.ones((n, 2))
     yaw = {"before": np.zeros(n), "after": np.zeros(n)}
     for k in range(n):
-        f = fit_whole(problem, parts, effects, np.flatnonzero(np.arange(n) != k), start)
+        f = (fit(problem, effects, outside(problem.seg, parts, k), start) if on_segments
+             else fit_whole(problem, parts, effects, np.flatnonzero(np.arange(n) != k), start))
         model = f.params
         models.append(model)
         xs.append(f.x)
@@ -532,6 +550,16 @@ def transfer(problem: Problem, parts: Segments, by: str, effects: tuple[str, ...
     return Transfer(effects, by, models=models, xs=np.array(xs), yaw_before=yaw["before"],
                     yaw_after=yaw["after"], travel_m=float(np.median(travel)),
                     turned_rad=float(np.median(turned)), scales=scales, **out)
+
+
+def outside(seg: Segments, parts: Segments, k: int) -> np.ndarray:
+    """Index of the segments of ``seg`` whose middle lies outside part ``k`` of ``parts``
+    (another log, or another stretch of the same log)."""
+    mid = seg.start + 0.5 * seg.gt_ok.sum(axis=1)
+    lo = parts.start[k]
+    hi = lo + int(parts.gt_ok[k].sum())
+    inside = (seg.log_index == parts.log_index[k]) & (mid >= lo) & (mid < hi)
+    return np.flatnonzero(~inside)
 
 
 def motion_scales(part: Segments, model) -> np.ndarray:

@@ -331,18 +331,25 @@ def transfer_markdown(tr: dict | None) -> list[str]:
              "error over the nominal model's (lower is better).", "",
              "| model | held-out path error ratio | per part | final position error, nominal "
              "→ model [m] | drift | transfers |", "|---|---|---|---|---|---|"]
-    rows = list(tr["tested"]) + ([tr["named_cause"]] if "named_cause" in tr and
-                                 tr["named_cause"]["effects"] not in
-                                 [t["effects"] for t in tr["tested"]] else [])
-    for t in rows:
+    rows = [("+".join(t["effects"]), t) for t in tr["tested"]]
+    if "named_cause" in tr and tr["named_cause"]["effects"] not in \
+            [t["effects"] for t in tr["tested"]]:
+        rows.append(("+".join(tr["named_cause"]["effects"]), tr["named_cause"]))
+    if "named_cause_on_segments" in tr:
+        # the named slip law as it is named: fitted on the segments outside the part
+        t = tr["named_cause_on_segments"]
+        rows.append(("+".join(t["effects"]) + " (fitted on segments)", t))
+    for label, t in rows:
         end = t["final_position_error_m"]
+        worse = (t["makes_parts_materially_worse"] if "makes_parts_materially_worse" in t
+                 else t["makes_a_part_worse"])
         lines.append(
-            f"| {'+'.join(t['effects'])} | {num(t['error_ratio'], '.3f')} | "
+            f"| {label} | {num(t['error_ratio'], '.3f')} | "
             f"{', '.join(num(r, '.2f') for r in t['per_part_error_ratio'])} | "
             f"{num(float(np.mean(end['before'])), '.4f')} → "
             f"{num(float(np.mean(end['after'])), '.4f')} | "
             f"{num(max(t['drift'], t['turn_drift']), '.4f')} | "
-            + ("no: worse on the held-out parts" if t["makes_a_part_worse"] else
+            + ("no: worse on the held-out parts" if worse else
                "yes" if t.get("transfers") else "no: not material") + " |")
     lines += ["", f"Decision: {tr.get('decision', '–')}.", ""]
     return lines

@@ -27,11 +27,14 @@ either route; which route is reported per candidate (``long_horizon`` in the JSO
 On a log the nominal model explains, an extension fitted on other segments predicts held-out
 segments slightly *worse* (it fitted noise), so the tests fail and the answer is ``none``.
 Among significant effects the cause is the one with the lowest held-out error, except that a
-candidate with fewer parameters that is not significantly worse (and within ``TIE_RATIO`` of
-the best) is preferred: parsimony, so that a track-width change is not
-called turning slip. Further effects are added one at a time ("also", forward selection over
-every testable effect that helps alone on either route) while the joint model passes the same
-three tests against the current one, except that a calibration effect (wheel radii, track
+candidate with fewer parameters that ties with the best (not significantly worse and its
+error within ``TIE_RATIO`` of the best's; or, when the best refines its mechanism, within
+``TIE_GAIN`` of the nominal model's error: two fits of one mechanism that both remove nearly
+all of it tie) is preferred: parsimony, so that a track-width change is not called turning
+slip, nor one torque-slip law a soil map. Further
+effects are added one at a time ("also", forward selection over every testable effect that
+helps alone on either route) while the joint model passes the same three tests against the
+current one, except that a calibration effect (wheel radii, track
 width: ``Effect.calibration``) need not be material on its own once a cause is named, and a
 local effect (``Effect.local``: soil under part of the route) is added on the short route
 only; the joint model is then fitted on all segments, its parameters reported with their
@@ -58,6 +61,7 @@ MIN_GAIN = 0.2  # relative fall of the held-out mean squared error an effect mus
 MIN_DRIFT = 0.005  # [-] material drift: RMS fall × √3 / segment travel
 MIN_GYRO_DRIFT_RAD_S = 1e-3  # [rad/s] material gyro heading drift: RMS fall × √3 / duration
 TIE_RATIO = 1.25  # a simpler effect within this error ratio of the best and not worse wins
+TIE_GAIN = 0.01  # ... or, the best refining its mechanism, within this of the nominal error
 N_FOLDS = 6
 MIN_SEGMENTS = 4
 GEOMETRIC_SETS = (("track_width",), ("track_width", "rolling_radius"))
@@ -218,7 +222,7 @@ def _judge(problem: Problem, cand: Candidate, reference: np.ndarray,
         cand.material = cand.drift >= MIN_DRIFT
     cand.short_significant = (cand.p_value < ALPHA and cand.gain_relative >= MIN_GAIN
                               and (cand.material or increment))
-    cand.significant = cand.short_significant or cand.long_significant
+    cand.significant = cand.short_significant or _long_counts(cand)
 
 
 def _submit_long(workers: Workers, problem: Problem, hz: Routes, effects: tuple[str, ...],
@@ -280,7 +284,17 @@ def _judge_long(problem: Problem, hz: Routes | None, cand: Candidate,
     drift = max(cand.long.drift, cand.long.turn_drift)
     cand.long_significant = (cand.long.p_value < ALPHA and cand.long.gain_relative >= MIN_GAIN
                              and (drift >= material or increment))
-    cand.significant = cand.short_significant or cand.long_significant
+    cand.significant = cand.short_significant or _long_counts(cand)
+
+
+def _long_counts(cand: Candidate) -> bool:
+    """Whether a pass on the long route names ``cand``: not when its held-out short segments
+    are materially worse than the reference's (a drift of ``MIN_DRIFT`` added, or
+    ``MIN_GYRO_DRIFT_RAD_S``). A model that makes held-out data worse is never named; a slow
+    drift the segments cannot see leaves them about as they were, while a soil map fitted on
+    other blocks of a sweep, each its own ground, is a guess on the segments it never saw."""
+    material = MIN_GYRO_DRIFT_RAD_S if cand.channel == "gyro" else MIN_DRIFT
+    return cand.long_significant and cand.drift > -material
 
 
 def _merged(per_source: list[list[dict]]) -> list[dict] | None:
@@ -303,47 +317,78 @@ def _same_mechanism(name: str, chosen: tuple[str, ...]) -> bool:
     return mechanism is not None and any(effect(c).mechanism == mechanism for c in chosen)
 
 
-def _pick(significant: list[Candidate]) -> Candidate:
-    """Lowest held-out error, unless a simpler candidate is not significantly worse.
+def _nests(best: tuple[str, ...], simpler: tuple[str, ...]) -> bool:
+    """Whether the best candidate refines the simpler one's mechanism (``Effect.mechanism``:
+    a soil map's regions each hold a torque-slip law, so one law is a map of one region)."""
+    return any(_same_mechanism(e, best) for e in simpler)
+
+
+def _ties(effects: tuple[str, ...], best_effects: tuple[str, ...], cand_error: float,
+          best_error: float, nominal_error: float, p_worse: float) -> bool:
+    """Whether a simpler candidate (``effects``) ties with the best: not significantly worse
+    (``p_worse``) and its error within ``TIE_RATIO`` of the best's; or, when the best refines
+    the same mechanism (:func:`_nests`), within ``TIE_GAIN`` of the nominal model's error of
+    it. A map of more regions fits a little better everywhere, so its consistent edge is
+    significant however small: judged on the nominal scale, two fits of one mechanism that
+    both remove nearly all of the nominal error tie, whatever the ratio of their residuals.
+    Between mechanisms the ratio and the test decide (a turning slip is not a wheel radius
+    because both leave little)."""
+    return ((p_worse >= ALPHA and cand_error <= TIE_RATIO * best_error)
+            or (_nests(best_effects, effects)
+                and cand_error - best_error <= TIE_GAIN * nominal_error))
+
+
+def _pick(significant: list[Candidate], reference: np.ndarray) -> Candidate:
+    """Lowest held-out error, unless a simpler candidate ties with it (:func:`_ties`;
+    ``reference``: the nominal model's held-out errors).
 
     "Simpler": fewer parameters, then earlier in the vocabulary's order (``Effect.rank``:
     geometry before slip laws, the order of ``log-format.md``).
     """
     best = min(significant, key=lambda c: c.errors.sum())
     order = list(EFFECTS)
+    nominal = float(reference.sum())
     for cand in sorted(significant, key=lambda c: (c.n_params, order.index(c.effects[0]))):
         if cand is best:
             return best
         _, p_worse = compare(cand.errors, best.errors)
-        if p_worse >= ALPHA and cand.errors.sum() <= TIE_RATIO * best.errors.sum():
+        if _ties(cand.effects, best.effects, float(cand.errors.sum()),
+                 float(best.errors.sum()), nominal, p_worse):
             return cand
     return best
 
 
 def _pick_long(significant: list[Candidate], base: LongReference) -> Candidate:
-    """As :func:`_pick`, on the long-horizon scores (fold-level t-test for "not worse")."""
+    """As :func:`_pick`, on the long-horizon scores (fold-level t-test for "not worse"; the
+    scores are already ratios to the nominal model's)."""
     best = min(significant, key=lambda c: _long_ratio(c, base))
     order = list(EFFECTS)
     for cand in sorted(significant, key=lambda c: (c.n_params, order.index(c.effects[0]))):
         if cand is best:
             return best
         worse = horizon.judge_pair(_long(cand).errors, _long(best).errors)
-        if worse >= ALPHA and _long_ratio(cand, base) <= TIE_RATIO * _long_ratio(best, base):
+        if _ties(cand.effects, best.effects, _long_ratio(cand, base), _long_ratio(best, base),
+                 1.0, worse):
             return cand
     return best
 
 
-def _choose(sig: list[Candidate], long_base: LongReference | None) -> Candidate:
-    """The short-segment pick when some effect passes there, else the long-horizon pick."""
+def _choose(sig: list[Candidate], reference: np.ndarray,
+            long_base: LongReference | None) -> Candidate:
+    """The short-segment pick when some effect passes there, else the long-horizon pick
+    (``reference``: the nominal model's held-out errors on the short segments)."""
     short = [c for c in sig if c.short_significant]
-    return _pick(short) if short or long_base is None else _pick_long(sig, long_base)
+    return (_pick(short, reference) if short or long_base is None
+            else _pick_long(sig, long_base))
 
 
 def _step(problem: Problem, hz: Routes | None, folds: np.ndarray,
           candidates: list[Candidate], current: Candidate, rest: list[str],
-          long_base: LongReference | None, workers: Workers) -> Candidate | None:
+          reference: np.ndarray, long_base: LongReference | None, workers: Workers
+          ) -> Candidate | None:
     """One forward-selection step: ``current`` joined by each of ``rest`` in turn; the pick
-    among the joints that pass against ``current`` (None if none does)."""
+    among the joints that pass against ``current`` (None if none does; ``reference``: the
+    nominal model's held-out errors, the scale of the pick's ties)."""
     alone = {name: next(c for c in candidates if c.effects == (name,)) for name in rest}
     # each part starts from its own fit, fold by fold: the named cause's, and the added
     # effect's fitted alone (no second search for its start, e.g. a patch)
@@ -371,7 +416,7 @@ def _step(problem: Problem, hz: Routes | None, folds: np.ndarray,
                         pending=longs[name])
         if joints[name].significant:
             trials.append(joints[name])
-    return _choose(trials, long_base) if trials else None
+    return _choose(trials, reference, long_base) if trials else None
 
 
 def select(problem: Problem, progress: bool = False, logs: list | None = None,
@@ -425,7 +470,7 @@ def _select(problem: Problem, progress: bool, logs: list | None, workers: Worker
         sig = [c for c in candidates if c.channel == ch and c.significant]
         if not sig:
             continue
-        current = _choose(sig, long_base.get(ch))
+        current = _choose(sig, baseline[ch].errors, long_base.get(ch))
         # forward selection over every testable effect that helps alone on either route (an
         # effect masked by the cause, not significant alone, may pass once the cause is in)
         rest = [c.effects[0] for c in candidates if c.channel == ch and not c.untestable
@@ -433,8 +478,8 @@ def _select(problem: Problem, progress: bool, logs: list | None, workers: Worker
         rest = [r for r in rest if r not in current.effects
                 and not _same_mechanism(r, current.effects)]
         while rest:
-            best = _step(problem, hz, folds, candidates, current, rest, long_base.get(ch),
-                         workers)
+            best = _step(problem, hz, folds, candidates, current, rest,
+                         baseline[ch].errors, long_base.get(ch), workers)
             if best is None:
                 break
             current = best
@@ -489,7 +534,14 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
       held-out parts worse and no geometric model transfers;
     - another cause named (not a local one, which the short segments judge): tested the same
       way, and replaced by the geometric model when that transfers at least as well, or
-      dropped when it predicts the held-out parts worse.
+      dropped when it predicts the held-out parts worse. A slip law that passed on the
+      held-out segments, though, is judged as it is named, fitted on segments: it stays
+      unless the geometric model also explains those segments (:func:`_explains`: not
+      significantly worse there, and tied), and when its whole-path fits predict the
+      held-out parts worse it is fitted on the segments outside each part and replayed
+      whole over it, and dropped (for the geometric model, if one transfers) only if it
+      makes them materially worse (:func:`_worse_transfer_decision`). So a model that makes
+      held-out data worse is still never named: the test is made on the model that is.
 
     ``final`` is updated in place. Returns the pose model fitted on every run's whole path
     (None when the pose channel's model is left as it was) and what the route found, for the
@@ -529,11 +581,35 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
             **({"named_cause": {**mine.as_dict(), "transfers": mine.passes(MIN_GAIN, MIN_DRIFT)}}
                if mine is not None else {})}
     # (mine is None only when nothing was named)
-    if best is not None and (current is None or geometric_current or mine is None
-                             or not mine.passes(MIN_GAIN, MIN_DRIFT)
-                             or best.after.sum() <= mine.after.sum()):
+    replace = best is not None and (current is None or geometric_current or mine is None
+                                    or not mine.passes(MIN_GAIN, MIN_DRIFT)
+                                    or best.after.sum() <= mine.after.sum())
+    slip_law = (current is not None and mine is not None and not geometric_current
+                and current.short_significant)
+    geometric = named = None
+    if slip_law and replace and best is not None and current is not None:
+        # a slip law the held-out segments found stays unless the geometric model explains
+        # those segments too
+        geometric = cross_validate(problem, _geometric_order(best.effects, ()), folds)
+        _judge(problem, geometric, baseline.errors)
+        replace = _explains(geometric, current, baseline.errors)
+        info["geometric_on_segments"] = {"effects": list(geometric.effects),
+                                         "error_ratio": geometric.error_ratio,
+                                         "explains_the_cause": replace}
+    if slip_law and not replace and mine is not None and mine.worse and current is not None:
+        # the named model is fitted on segments: held out the same way, it is the model that
+        # must not make a held-out part worse (three slip parameters fitted on one half's
+        # whole path alone are ill-determined)
+        named = horizon.transfer(problem, parts, by, current.effects, on_segments=True)
+        info["named_cause_on_segments"] = {
+            **named.as_dict(), "transfers": named.passes(MIN_GAIN, MIN_DRIFT),
+            "makes_parts_materially_worse": named.materially_worse(MIN_DRIFT)}
+        # failing its own test, it gives way to a geometric model that transfers
+        replace = (best is not None and geometric is not None
+                   and _worse_transfer_decision(False, True, named) == "dropped")
+    if replace and best is not None:
         effects = _geometric_order(best.effects, current.effects if current else ())
-        cand = cross_validate(problem, effects, folds)
+        cand = geometric if geometric is not None else cross_validate(problem, effects, folds)
         _judge(problem, cand, baseline.errors)
         cand.gain_relative = 1.0 - best.ratio
         final["pose"] = cand
@@ -553,21 +629,63 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
             if geometric_current else
             f"replaces {current.name}: the geometric model transfers "
             + ("as well or better" if mine is not None and mine.passes(MIN_GAIN, MIN_DRIFT) else
-               f"and {current.name} does not")))
+               f"and {current.name} does not")
+            + (", and explains the held-out segments as well" if geometric is not None
+               and named is None else "")
+            + (f"; {current.name}, fitted on the segments outside each held-out part, makes "
+               "them materially worse" if named is not None else "")))
         return whole, info
-    if mine is not None and mine.worse:
-        if current is not None and _far_from_nominal(problem, current):
-            # the log's meta.json, not the vehicle, is the likelier culprit: keep the cause so
-            # the report warns, rather than answer none
-            info["decision"] = (f"{current.name} kept though it predicts the held-out parts "
-                                "worse: its fit is far from the nominal geometry (warned)")
-            return None, info
-        del final["pose"]
-        info["decision"] = f"{'+'.join(mine.effects)} dropped: it predicts the held-out " \
-            "parts worse"
+    if current is None:
+        info["decision"] = "none transfers"
         return None, info
-    info["decision"] = "kept" if current is not None else "none transfers"
+    if mine is None or not mine.worse:
+        info["decision"] = (f"{current.name} kept: the geometric model transfers but does not "
+                            "explain the held-out segments as well" if geometric is not None
+                            else "kept")
+        return None, info
+    if _worse_transfer_decision(geometric_current, current.short_significant,
+                                named) == "kept":
+        info["decision"] = (f"{current.name} kept: significant on held-out segments, and "
+                            "fitted on the segments outside each held-out part it makes no "
+                            "part materially worse (its whole-path fits do)")
+        return None, info
+    if _far_from_nominal(problem, current):
+        # the log's meta.json, not the vehicle, is the likelier culprit: keep the cause so
+        # the report warns, rather than answer none
+        info["decision"] = (f"{current.name} kept though it predicts the held-out parts "
+                            "worse: its fit is far from the nominal geometry (warned)")
+        return None, info
+    del final["pose"]
+    info["decision"] = f"{'+'.join(mine.effects)} dropped: it predicts the held-out " \
+        "parts worse"
     return None, info
+
+
+def _explains(geometric: Candidate, cause: Candidate, reference: np.ndarray) -> bool:
+    """Whether a geometric model explains the held-out segments a named slip law was found
+    on: not significantly worse there, and tied with it as :func:`_pick` ties a simpler
+    candidate with the best (``reference``: the nominal model's held-out errors)."""
+    _, p_worse = compare(geometric.errors, cause.errors)
+    return _ties(geometric.effects, cause.effects, float(geometric.errors.sum()),
+                 float(cause.errors.sum()), float(reference.sum()), p_worse)
+
+
+def _worse_transfer_decision(geometric: bool, short_significant: bool,
+                             on_segments: horizon.Transfer | None) -> str:
+    """What becomes of a named cause whose whole-path fits predict the held-out parts worse
+    and that no geometric model replaces: ``"kept"`` or ``"dropped"``.
+
+    A geometric cause is judged by its whole paths alone: they are what determine it. A slip
+    law that passed on the held-out segments is kept when it also passes the rule that no
+    model making held-out data worse is named, tested on the model as it is named: fitted on
+    the segments outside each held-out part (``on_segments``), replayed whole over that part,
+    no worse than the nominal model in sum, nor materially worse (``MIN_DRIFT``: what would
+    not count as a fix does not count as harm) on half of the parts or more. A cause found
+    on the long route alone has no such evidence and is dropped.
+    """
+    if geometric or not short_significant or on_segments is None:
+        return "dropped"
+    return "dropped" if on_segments.materially_worse(MIN_DRIFT) else "kept"
 
 
 def _far_from_nominal(problem: Problem, cand: Candidate) -> bool:

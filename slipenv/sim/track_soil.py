@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import importlib
 import math
+import pathlib
 from dataclasses import dataclass
 
 import llvmlite.binding
@@ -56,6 +57,8 @@ import numpy as np
 from numba import njit, types
 from numba.core import config as numba_config
 
+import slipenv.terramechanics as terramechanics
+from slipenv.contracts.compiled_cache import refresh_stale_cache
 from slipenv.contracts.constants import G_MPS2
 from slipenv.pybullet_quiet import import_pybullet
 from slipenv.sim.bullet_native import (
@@ -79,6 +82,10 @@ from slipenv.terramechanics.track import (
 )
 from slipenv.vehicles.body import VehicleBody
 from slipenv.vehicles.spec import VehicleSpec
+
+# the compiled substep carries the track model's code (track.py and the laws it calls)
+refresh_stale_cache(__file__, *(pathlib.Path(terramechanics.__file__).with_name(name)
+                               for name in ("track.py", "bekker.py", "janosi.py")))
 
 p = import_pybullet()  # the banner-free first import (see slipenv.pybullet_quiet)
 _track_io = importlib.import_module("slipenv.sim._track_io")  # built by pip install (setup.py)
@@ -111,10 +118,11 @@ class TrackModelParams:
         test_track.py) and the standstill direction spring stable at 240 Hz.
     damping_ratio : float
         Damping ratio of the soil springs at rest (``track.soil_damper_forces``), per cell:
-        along the stress, of the Janosi spring's tangent stiffness; across it, of the
-        direction state's tau A/e_max; each for the cell's mass share and capped at half the
-        explicit stability limit m/dt. Critical (1.0): at 0.5 the vehicle parked facing up a 15°
-        slope rocks on its direction springs and ratchets 11 mm downhill in 10 s.
+        with the resultant law, along the stress of the Janosi spring's tangent stiffness and
+        across it of the direction state's tau A/e_max; with the decoupled law, of each
+        component's own tangent stiffness; each for the cell's mass share and capped at half
+        the explicit stability limit m/dt. Critical (1.0): at 0.5 the vehicle parked facing up
+        a 15° slope rocks on its direction springs and ratchets 11 mm downhill in 10 s.
     resistance_speed_mps : float
         Regularisation of the rut resistance's sign at rest [m/s] (not a speed ramp: the
         resistance is rate independent above it).
@@ -125,11 +133,9 @@ class TrackModelParams:
         The cells' shear law (``track.SHEAR_LAWS``): ``"resultant"`` (default), Wong-Chiang's
         tau(|j|) against the sliding direction; ``"decoupled"``, Ishigami et al.'s components
         each of its own displacement, the resultant capped at the Mohr-Coulomb strength
-        (``track.decoupled_stress_pa``). With either law the soil dampers split along and
-        across the stress, across it with the direction state's |f|/e_max, a spring the
-        decoupled law does not have; the 15° circle of ``slipenv reproduce yamauchi`` is
-        sensitive to that split (quick run: 38 / 18 cm feedback / feed-forward mean error,
-        against 15 / 14 cm with the resultant law's dampers).
+        (``track.decoupled_stress_pa``), each component's soil damper with that component's
+        own stiffness. The vehicle's ``track_shear_law`` sets it (Patako's preset keeps the
+        resultant law: ``slipenv.vehicles.presets.tracked_patako_wong_chiang`` says why).
     """
 
     n_cells: int = 16

@@ -42,7 +42,9 @@ Shear stress (Janosi & Hanamoto; Wong Eq. 2.56) with Mohr-Coulomb strength (Wong
     vehicle chatters and ratchets downhill); the decoupled law's sign is the displacement's,
     continuous through j = 0.
     At rest the soil springs get Kelvin-Voigt dampers on each cell's displacement rate
-    (`soil_damper_forces`; LuGre's sigma_1 term), zero in any steady motion.
+    (`soil_damper_forces`; LuGre's sigma_1 term), zero in any steady motion: along and across
+    the stress for the resultant law (its Janosi spring and its direction spring), per
+    component for the decoupled law (each component's own spring).
 Normal pressure: the road-wheel loads, spread piecewise-linearly over the cells
     (`load_spread_matrix`, hat functions that conserve the load exactly).
 Sinkage (Bekker's pressure-sinkage law, Wong Ch. 2): z0 = (p/(k_c/b + k_phi))^(1/n) per cell
@@ -75,9 +77,13 @@ import math
 import numpy as np
 from numba import njit
 
+from slipenv.contracts.compiled_cache import refresh_stale_cache
 from slipenv.terramechanics.bekker import compaction_resistance_n, pressure_sinkage_m
 from slipenv.terramechanics.bekker import slip_sinkage_factor as bekker_slip_sinkage
 from slipenv.terramechanics.janosi import janosi_stress_pa, shear_strength_pa
+
+# the track's kernels carry the compiled Bekker and Janosi laws they call
+refresh_stale_cache(__file__, "bekker.py", "janosi.py")
 
 __all__ = [
     "DIRECTION_SPEED_MPS",
@@ -212,10 +218,10 @@ def shear_direction(vx, vy, jx, jy, v_reg: float = DIRECTION_SPEED_MPS):
 
 
 def decoupled_stress_pa(jx_m: float, jy_m: float, strength_pa: float,
-                        shear_modulus_m: float) -> tuple[float, float, float]:
+                        shear_modulus_m: float) -> tuple[float, float, float, float]:
     """Ishigami et al.'s decoupled shear stress (tau_x, tau_y) [Pa] of a displacement (j_x, j_y)
-    [m], along the displacement (the soil resists with -tau), and its tangent stiffness along
-    the stress [Pa/m].
+    [m], along the displacement (the soil resists with -tau), and each component's tangent
+    stiffness d tau_x/d j_x, d tau_y/d j_y [Pa/m].
 
     Each component is Janosi's law of its own displacement, tau_x = tau_max (1 - exp(-|j_x|/K))
     sgn(j_x), tau_y likewise (Ishigami, Miwa, Nagatani & Yoshida, J. Field Robotics 24(3)
@@ -226,23 +232,25 @@ def decoupled_stress_pa(jx_m: float, jy_m: float, strength_pa: float,
     from the sliding direction, so the law is a function of j alone (a spring at rest). Pure
     longitudinal or lateral displacement gives the resultant law's tau(|j|).
 
-    The stiffness is n . diag(d tau_x/d j_x, d tau_y/d j_y) . n along the stress direction n,
-    each d tau/d j = (tau_max - |tau|)/K; tau_max/K at j = 0; 0 on the cap (the resultant
-    cannot grow there), as the resultant law's tangent at its strength.
+    The stiffnesses are the diagonal of the law's Jacobian, each component's derivative by its
+    own displacement (what a damper per component needs, `soil_damper_forces`): below the cap
+    (tau_max - |tau_x|)/K = tau_max e^{-|j_x|/K}/K, tau_max/K at j = 0; on the cap, where
+    tau = tau_max g/|g| with g the uncapped (tau_x, tau_y)/tau_max, d tau_x/d j_x = tau_max
+    g_x' g_y^2/|g|^3 with g_x' = e^{-|j_x|/K}/K (the other component holds the cap's share).
     """
-    grow_x = -math.expm1(-abs(jx_m) / shear_modulus_m)
-    grow_y = -math.expm1(-abs(jy_m) / shear_modulus_m)
-    tx = math.copysign(strength_pa * grow_x, jx_m)
-    ty = math.copysign(strength_pa * grow_y, jy_m)
-    mag2 = tx * tx + ty * ty
-    if mag2 > strength_pa * strength_pa:  # the soil carries no more than its strength
-        cap = strength_pa / math.sqrt(mag2)
-        return tx * cap, ty * cap, 0.0
-    if mag2 <= 0.0:
-        return tx, ty, strength_pa / shear_modulus_m
-    weight = strength_pa / (shear_modulus_m * mag2)
-    stiffness = ((1.0 - grow_x) * tx * tx + (1.0 - grow_y) * ty * ty) * weight
-    return tx, ty, stiffness
+    inv_k = 1.0 / shear_modulus_m
+    decay_x = math.exp(-abs(jx_m) * inv_k)
+    decay_y = math.exp(-abs(jy_m) * inv_k)
+    gx = math.copysign(-math.expm1(-abs(jx_m) * inv_k), jx_m)
+    gy = math.copysign(-math.expm1(-abs(jy_m) * inv_k), jy_m)
+    mag2 = gx * gx + gy * gy
+    if mag2 > 1.0:  # the soil carries no more than its strength
+        inv_mag = 1.0 / math.sqrt(mag2)
+        bend = strength_pa * inv_k * inv_mag * inv_mag * inv_mag
+        return (strength_pa * gx * inv_mag, strength_pa * gy * inv_mag,
+                bend * decay_x * gy * gy, bend * decay_y * gx * gx)
+    return (strength_pa * gx, strength_pa * gy, strength_pa * decay_x * inv_k,
+            strength_pa * decay_y * inv_k)
 
 
 _decoupled = njit(cache=True)(decoupled_stress_pa)
@@ -394,7 +402,8 @@ def steady_track_forces(vx: float, vy: float, yaw_rate: float, y_track_m: float,
 def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: np.ndarray,
                 dx_m: float, cohesion_pa: np.ndarray, tan_phi: np.ndarray,
                 shear_modulus_m: np.ndarray, out: np.ndarray | None = None,
-                decoupled: bool = False) -> tuple[np.ndarray, np.ndarray]:
+                decoupled: bool = False,
+                lateral_stiffness: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Shear force of each cell on the track and its tangent stiffness.
 
     A cell's j is the mean of its two faces, e its centre value; the stress tau(|j|) is
@@ -406,7 +415,8 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: 
     ``cohesion_pa``, ``tan_phi``, ``shear_modulus_m``) is given per track, arrays of length
     n_tracks. With ``decoupled`` the stress is Ishigami et al.'s decoupled law instead
     (`decoupled_stress_pa`: each component of its own displacement, against j; e unused), f =
-    -tau b dx, and k its tangent along the stress times b dx.
+    -tau b dx, and the stiffness is each component's own, b dx d tau_x/d j_x returned and
+    b dx d tau_y/d j_y written into ``lateral_stiffness`` (n_tracks, n_cells) when given.
     """
     nt, nc = e.shape[1], e.shape[2]
     if out is None:
@@ -420,8 +430,10 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: 
             jy = (j[1, i, c] + j[1, i, c + 1]) * 0.5
             strength = _strength(pressure_pa[i, c], cohesion_pa[i], tan_phi[i])
             if decoupled:
-                tx, ty, k = _decoupled(jx, jy, float(strength), shear_modulus_m[i])
-                stiffness[i, c] = k * area
+                tx, ty, kx, ky = _decoupled(jx, jy, float(strength), shear_modulus_m[i])
+                stiffness[i, c] = kx * area
+                if lateral_stiffness is not None:
+                    lateral_stiffness[i, c] = ky * area
                 out[0, i, c] = -tx * area
                 out[1, i, c] = -ty * area
                 continue
@@ -437,17 +449,24 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: 
 @njit(cache=True)
 def soil_damper_forces(dj_m: np.ndarray, shear_force_n: np.ndarray,
                        stiffness_n_per_m: np.ndarray, direction_length_m: float,
-                       damping_ratio: float, cell_mass_kg: float, dt_s: float) -> np.ndarray:
+                       damping_ratio: float, cell_mass_kg: float, dt_s: float,
+                       lateral_stiffness_n_per_m: np.ndarray | None = None) -> np.ndarray:
     """Kelvin-Voigt dampers of the soil springs at rest, per cell [N], shape of ``dj_m``.
 
     The damper acts on the change ``dj_m`` (2, n_tracks, n_cells) of each cell's displacement
     over the step at a fixed hull position: zero in any steady motion (driving, steady
     turning), so it never alters the force law there; it only damps transients (LuGre's
-    sigma_1 term, Canudas de Wit et al., IEEE TAC 40 (1995) 419-425). Along the stress
-    (``shear_force_n``, from :func:`cell_forces`) its stiffness is the Janosi tangent
-    ``stiffness_n_per_m``, across it the direction state's |f|/e_max; each damping coefficient
-    is 2 zeta sqrt(k m) for the cell's mass share m, capped at half the explicit stability
-    limit m/dt. A cell without stress has only the across part, which is then zero.
+    sigma_1 term, Canudas de Wit et al., IEEE TAC 40 (1995) 419-425). Each damping
+    coefficient is 2 zeta sqrt(k m) for the cell's mass share m and the spring's tangent
+    stiffness k, capped at half the explicit stability limit m/dt.
+
+    The resultant law's springs (``lateral_stiffness_n_per_m`` not given): along the stress
+    (``shear_force_n``, from :func:`cell_forces`) k is the Janosi tangent
+    ``stiffness_n_per_m``, across it the direction state's |f|/e_max; a cell without stress
+    has only the across part, which is then zero. The decoupled law's (given): its springs are
+    the two components, each of its own displacement, so each component of ``dj_m`` is damped
+    with its own tangent, x with ``stiffness_n_per_m`` and y with ``lateral_stiffness_n_per_m``
+    (`decoupled_stress_pa`); the law has no direction spring.
     """
     nt, nc = dj_m.shape[1], dj_m.shape[2]
     force = np.empty((2, nt, nc))
@@ -457,6 +476,12 @@ def soil_damper_forces(dj_m: np.ndarray, shear_force_n: np.ndarray,
     inv_e = 1.0 / direction_length_m
     for i in range(nt):
         for c in range(nc):
+            if lateral_stiffness_n_per_m is not None:
+                x_rate = min(math.sqrt(stiffness_n_per_m[i, c]) * gain, cap) * per_step
+                y_rate = min(math.sqrt(lateral_stiffness_n_per_m[i, c]) * gain, cap) * per_step
+                force[0, i, c] = dj_m[0, i, c] * x_rate
+                force[1, i, c] = dj_m[1, i, c] * y_rate
+                continue
             fx, fy = shear_force_n[0, i, c], shear_force_n[1, i, c]
             tau = math.hypot(fx, fy)
             # damping coefficients / dt, along and across the stress
@@ -654,13 +679,19 @@ def track_substep(load_n: np.ndarray, belt_speed_mps: np.ndarray, track_speed_mp
     v_cell = sliding_velocity(track_speed_mps, belt_speed_mps, lateral_speed_mps,
                               yaw_rate_rad_s, x_cell_m)
     advance_shear(j, e, v_cell, belt_speed_mps, yaw_rate_rad_s, dx, dt, settings[P_E_MAX])
+    decoupled = settings[P_SHEAR_LAW] == 1.0
+    lateral = np.empty((nt, nc))
     f_shear, stiffness = cell_forces(j, e, pressure, width, dx, soil[S_C], soil[S_TAN_PHI],
-                                     soil[S_K], out[2:4], settings[P_SHEAR_LAW] == 1.0)
+                                     soil[S_K], out[2:4], decoupled, lateral)
     dj = j[:, :, :-1] + j[:, :, 1:]
     dj -= j_old
     dj *= 0.5
-    f_damp = soil_damper_forces(dj, f_shear, stiffness, settings[P_E_MAX], settings[P_ZETA],
-                                settings[P_CELL_MASS], dt)
+    if decoupled:
+        f_damp = soil_damper_forces(dj, f_shear, stiffness, settings[P_E_MAX],
+                                    settings[P_ZETA], settings[P_CELL_MASS], dt, lateral)
+    else:
+        f_damp = soil_damper_forces(dj, f_shear, stiffness, settings[P_E_MAX],
+                                    settings[P_ZETA], settings[P_CELL_MASS], dt)
     advance_wall(walls, v_cell[1], track_speed_mps, sinkage_m, dx, dt)
     f_wall = wall_force_n_per_m(walls, sinkage_m, settings[P_GAMMA], soil[S_C], soil[S_PHI],
                                 settings[P_MAX_WALL])

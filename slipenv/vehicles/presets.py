@@ -119,7 +119,14 @@ def tracked_patako(road_wheels_per_side: int = 5, track_model: str = "per_wheel"
 def tracked_patako_wong_chiang() -> VehicleSpec:
     """:func:`tracked_patako` with the Wong-Chiang track model: one Janosi shear
     field along each track, Bekker sinkage with slip-sinkage, a rut state and side-wall
-    bulldozing (``slipenv.terramechanics.track``, ``slipenv.sim.track_soil``)."""
+    bulldozing (``slipenv.terramechanics.track``, ``slipenv.sim.track_soil``).
+
+    Shear law: Wong & Chiang's resultant law (the spec's default), the stress against the
+    sliding velocity. Ishigami et al.'s decoupled components (``track_shear_law="decoupled"``)
+    narrow the turning-direction split of Endo's n on Yamauchi's slope, but on rigid ground,
+    where K is a millimetre, both components saturate and the stress points along a diagonal
+    whatever the sliding direction, and the vehicle no longer follows Yamauchi's circle on a
+    solid floor; it stays an option (docs/physics.md)."""
     return dataclasses.replace(tracked_patako(track_model="wong_chiang"),
                                name="tracked_patako_wong_chiang")
 

@@ -178,3 +178,19 @@ def test_a_fold_model_the_simulation_cannot_take_is_not_replayed_and_the_report_
     assert "cannot be applied to the simulation" in sim["note"]
     assert "k_s_<wheel>_nm" in sim["note"]
     assert num(sim["rmse_extended_m"]) == "n/a"
+
+
+def test_the_transfer_section_judges_a_slip_law_kept_on_segments_by_material_harm():
+    from slipenv.diagnose.report import transfer_markdown
+
+    half = {"effects": ["slope_side_slip"], "error_ratio": 0.92,
+            "per_part_error_ratio": [0.49, 1.03], "drift": 0.003, "turn_drift": 0.0,
+            "final_position_error_m": {"before": [0.13, 0.24], "after": [0.10, 0.18]}}
+    tr = {"held_out_by": "half", "parts": 2, "decision": "slope_side_slip kept",
+          "tested": [{**half, "effects": ["track_width"], "makes_a_part_worse": True}],
+          "named_cause": {**half, "makes_a_part_worse": True},
+          "named_cause_on_segments": {**half, "makes_a_part_worse": True,
+                                      "makes_parts_materially_worse": False}}
+    rows = {line.split(" | ")[0]: line for line in transfer_markdown(tr) if line.startswith("| ")}
+    assert rows["| slope_side_slip"].endswith("no: worse on the held-out parts |")
+    assert rows["| slope_side_slip (fitted on segments)"].endswith("no: not material |")

@@ -186,7 +186,7 @@ def simulate(
         Q = lm.process_Q(xs, dt_s, p.jerk_psd_v, p.jerk_psd_omega, p.tilt_psd,
                          p.radius_var_per_m, p.k_s_rel_var_per_m, p.inv_shape_var_per_m,
                          p.lateral_slip_var_per_m)
-        x = lm.process_fx(x, dt_s)
+        x = lm.process_fx(x, dt_s, p.tilt_psd)
         if process_noise:
             x[:len(xs)] += _sample(rng, Q)
         T_new = np.asarray(torque_fn(t, x), dtype=float)

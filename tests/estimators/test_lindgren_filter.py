@@ -101,10 +101,10 @@ def test_one_step_matches_plain_functions_and_filterpy() -> None:
     ekf.reset_state(x0, P0, frame(0.0, counts=(100.0, 200.0)))
     tau, gz, dc = 0.05, 0.12, np.array([44.0, 48.0])
     ekf.update(frame(tau, counts=(100.0 + dc[0], 200.0 + dc[1]), gyro_z_rad_s=gz))
-    F = lm.process_F(x0, tau)
+    F = lm.process_F(x0, tau, params.tilt_psd)
     Q = lm.process_Q(x0, tau, params.jerk_psd_v, params.jerk_psd_omega, params.tilt_psd)
     kf = ExtendedKalmanFilter(dim_x=9, dim_z=1)
-    kf.x, kf.P = lm.process_fx(x0, tau), F @ P0 @ F.T + Q
+    kf.x, kf.P = lm.process_fx(x0, tau, params.tilt_psd), F @ P0 @ F.T + Q
     kf.update(np.array([gz]), lambda s: lo.ins_H(s)[2:], lambda s: lo.ins_hx(s)[2:],
               R=np.array([[params.gyro_var_rad2ps2]]))
     args = (tau, 0.275, 1.5, 285.0)

@@ -80,7 +80,7 @@ def test_filter_equals_a_linear_kalman_filter_on_a_linear_gaussian_case() -> Non
     tau, g, cpr = 0.05, lm.G_MPS2, GEOM.counts_per_rad
     kf = KalmanFilter(dim_x=9, dim_z=2)
     kf.x, kf.P = x0.copy(), P0.copy()
-    kf.F = lm.process_F(x0, tau)
+    kf.F = lm.process_F(x0, tau, p.tilt_psd)
     kf.Q = lm.process_Q(x0, tau, p.jerk_psd_v, p.jerk_psd_omega, p.tilt_psd)
     H_acc = lo.ins_H(x0)[0:2]
     H_acc[1, lm.IOM] = 0.0  # v Ω / g with Ω ≡ 0
@@ -188,11 +188,11 @@ def test_prediction_in_a_used_workspace_is_F_P_Ft_plus_Q() -> None:
     work = np.full(kernel.work_size(n), 1e300)
     iwork = rng.integers(-5, 5, kernel.iwork_size(n))
     tau = 0.05
-    F = lm.process_F(x, tau)
+    F = lm.process_F(x, tau, cfg[kernel.C_TILT_PSD])
     Q = lm.process_Q(x, tau, *cfg[[kernel.C_JERK_V, kernel.C_JERK_W, kernel.C_TILT_PSD,
                                   kernel.C_RADIUS_VAR, kernel.C_KS_VAR, kernel.C_B_VAR,
                                   kernel.C_KBETA_VAR]])
-    x_expected, P_expected = lm.process_fx(x, tau), F @ P @ F.T + Q
+    x_expected, P_expected = lm.process_fx(x, tau, cfg[kernel.C_TILT_PSD]), F @ P @ F.T + Q
     x_expected[lm.ITH] = lm.wrap(x_expected[lm.ITH])
     for _ in range(2):  # the second call finds the first one's temporaries
         xk, Pk = x.copy(), P.copy()

@@ -16,6 +16,7 @@ from slipenv.estimators.lindgren.models import OracleSoil
 W = 1.5  # track width [m] (assumed vehicle)
 CPR = 285.0  # counts/rad (Lindgren)
 TAU = 0.05  # [s]
+TILT_PSD = 1e-4  # [rad²/s] the filter's default pitch and roll spectral density
 
 
 def state(seed: int = 0, n: int = lm.N_SLIP, v: float = 1.2) -> np.ndarray:
@@ -56,7 +57,8 @@ def assert_jacobian(H: np.ndarray, fun, x: np.ndarray) -> None:
 def test_process_jacobian(seed: int, n: int) -> None:
     x = state(seed, n)
     for tau in (TAU, 0.013, 0.4):
-        assert_jacobian(lm.process_F(x, tau), lambda s, t=tau: lm.process_fx(s, t), x)
+        assert_jacobian(lm.process_F(x, tau, TILT_PSD),
+                        lambda s, t=tau: lm.process_fx(s, t, TILT_PSD), x)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -147,6 +149,65 @@ def test_jerk_block_is_filterpys_continuous_white_noise() -> None:
                                    rtol=1e-12, atol=0.0)
 
 
+def test_process_noise_chains_are_the_jerk_blocks() -> None:
+    """Q's (θ, Ω, Ω̇) chain is the white-jerk block of the yaw density; its (s, v, v̇) chain is
+    that of the forward density, with the distance s laid along the mean heading u in (x, y)
+    (Lindgren Eq. 7)."""
+    x = state(2, lm.N_OKELLO + 1)
+    tau, q_v, q_w = 0.07, 0.5, 0.2
+    Q = lm.process_Q(x, tau, q_v, q_w, 1e-4, 1e-6, 1e-4, 0.3, 0.02)
+    yaw = [lm.ITH, lm.IOM, lm.IOMD]
+    np.testing.assert_allclose(Q[np.ix_(yaw, yaw)], Q_continuous_white_noise(3, tau, q_w),
+                               rtol=1e-12, atol=0.0)
+    qv = Q_continuous_white_noise(3, tau, q_v)
+    th_mid = x[lm.ITH] + 0.5 * tau * (x[lm.IOM] + 0.5 * tau * x[lm.IOMD])
+    u = np.array([math.cos(th_mid), math.sin(th_mid)])
+    speed = [lm.IV, lm.IVD]
+    np.testing.assert_allclose(Q[np.ix_(speed, speed)], qv[1:, 1:], rtol=1e-12, atol=0.0)
+    np.testing.assert_allclose(Q[:2, :2], qv[0, 0] * np.outer(u, u), rtol=1e-12, atol=1e-30)
+    np.testing.assert_allclose(Q[:2, speed], np.outer(u, qv[0, 1:]), rtol=1e-12, atol=1e-30)
+    np.testing.assert_array_equal(Q, Q.T)
+    chains = [0, 1, *yaw, *speed]
+    rest = np.ones_like(Q, dtype=bool)
+    rest[np.ix_(chains, chains)] = False
+    np.testing.assert_array_equal(Q[rest & ~np.eye(len(x), dtype=bool)], 0.0)
+
+
+@pytest.mark.parametrize("n", LAYOUTS)
+def test_models_written_into_a_used_array_equal_the_allocating_ones(n: int) -> None:
+    """The filter's ``_into`` models write into a workspace that still holds the last frame's
+    numbers: each must set every entry of its output, the Jacobians' zeros included, to what
+    the allocating function returns."""
+    x = state(3, n)
+    T = np.array([150.0, -60.0])
+    soil = (OracleSoil((0.283, 0.287), (2500.0, 2200.0)).as_array()
+            if lm.soil_size(n) == lm.N_BASE else lo.NO_SOIL)
+    beacon = np.array([14.0, 9.0])
+    odo, slip = (TAU, 0.275, W, CPR), (TAU, T, W, CPR, soil)
+    cases = [
+        (lm.process_fx(x, TAU, TILT_PSD), lambda o: lm.process_fx_into(x, TAU, TILT_PSD, o)),
+        (lo.ins_hx(x), lambda o: lo.ins_hx_into(x, o)),
+        (lo.ins_H(x), lambda o: lo.ins_H_into(x, o)),
+        (lo.tilt_hx(x), lambda o: lo.tilt_hx_into(x, o)),
+        (lo.tilt_H(x), lambda o: lo.tilt_H_into(x, o)),
+        (lo.odo_hx(x, *odo), lambda o: lo.odo_hx_into(x, *odo, o)),
+        (lo.odo_H(x, *odo), lambda o: lo.odo_H_into(x, *odo, o)),
+        (lo.odo_slip_hx(x, *slip), lambda o: lo.odo_slip_hx_into(x, *slip, o)),
+        (lo.odo_slip_H(x, *slip), lambda o: lo.odo_slip_H_into(x, *slip, o)),
+        (lo.bearing_H(x, beacon), lambda o: lo.bearing_H_into(x, beacon, o)),
+    ]
+    for expected, write_into in cases:
+        out = np.full(expected.shape, np.nan)
+        write_into(out)
+        assert np.all(np.isfinite(out))
+        np.testing.assert_array_equal(out, expected)
+    s = lo.slip_model(x, TAU, T, W, soil)
+    for i in range(2):
+        assert lo.wheel_slip_model(x, TAU, T, W, soil, i) == (s[0][i], s[1][i], s[2][i])
+    beacons = np.array([[14.0, 9.0], [-3.0, 5.0]])
+    assert [lo.bearing_to(x, *b) for b in beacons] == list(lo.bearing_hx(x, beacons))
+
+
 def test_process_noise_grows_with_distance_for_soil_states() -> None:
     x = state(0)
     x[lm.IVD] = 0.0
@@ -174,22 +235,44 @@ def test_process_integrates_a_circle() -> None:
     n = int(round(2.0 * math.pi / 0.25 / TAU))
     tau = 2.0 * math.pi / 0.25 / n
     for _ in range(n):
-        x = lm.process_fx(x, tau)
+        x = lm.process_fx(x, tau, TILT_PSD)
     assert math.hypot(x[lm.IX], x[lm.IY]) < 1e-3
     assert x[lm.ITH] == pytest.approx(2.0 * math.pi, abs=1e-12)
 
 
 def test_tilt_follows_a_fixed_plane_while_yawing() -> None:
     """On a plane rising along world x with gradient 0.1, nose-up pitch is 0.1 cos θ and
-    right-side-up roll 0.1 sin θ at any heading θ."""
+    right-side-up roll 0.1 sin θ at any heading θ (without reversion to level: q = 0)."""
     x = np.zeros(lm.N_BASE)
     x[lm.IOM] = 0.5
     x[lm.IA1] = 0.1
     for _ in range(70):
-        x = lm.process_fx(x, 0.1)
+        x = lm.process_fx(x, 0.1, 0.0)
     th = x[lm.ITH]
     np.testing.assert_allclose(x[[lm.IA1, lm.IA2]], [0.1 * math.cos(th), 0.1 * math.sin(th)],
                                atol=1e-12)
+
+
+def test_tilt_reverts_to_level_within_the_field_slope_prior() -> None:
+    """Pitch and roll are a Gauss-Markov process: a tilt decays as exp(-t q / 2σ²) (σ the
+    field's slope prior), over a short interval the noise is the random walk's q τ, and the
+    covariance propagated without measurements settles at σ² on each axis, while yawing too,
+    instead of growing without bound."""
+    sigma, q = lm.TILT_SIGMA_RAD, TILT_PSD
+    x = np.zeros(lm.N_BASE)
+    x[lm.IA1] = 0.1
+    for _ in range(1000):  # 50 s straight
+        x = lm.process_fx(x, TAU, q)
+    assert x[lm.IA1] == pytest.approx(0.1 * math.exp(-50.0 * q / (2.0 * sigma**2)), rel=1e-9)
+    assert lm.process_Q(x, TAU, 0.5, 0.5, q)[lm.IA1, lm.IA1] == pytest.approx(q * TAU, rel=2e-3)
+    x = np.zeros(lm.N_BASE)
+    x[lm.IV], x[lm.IOM] = 0.5, 0.3
+    tilt = [lm.IA1, lm.IA2]
+    P = np.zeros((2, 2))
+    for _ in range(40_000):  # 2000 s, 40 correlation times
+        F = lm.process_F(x, TAU, q)[np.ix_(tilt, tilt)]
+        P = F @ P @ F.T + lm.process_Q(x, TAU, 0.5, 0.5, q)[np.ix_(tilt, tilt)]
+    np.testing.assert_allclose(P, sigma**2 * np.eye(2), rtol=1e-6, atol=1e-12)
 
 
 def test_inertial_model_eq14() -> None:
@@ -255,14 +338,15 @@ def test_lateral_slip_leans_the_velocity_by_the_slip_angle(n: int) -> None:
     x = state(0, n)
     x[[lm.IVD, lm.IOMD]] = 0.0
     tau = 1e-4  # short enough that the heading does not turn
-    step = lm.process_fx(x, tau)[:2] - x[:2]
+    step = lm.process_fx(x, tau, TILT_PSD)[:2] - x[:2]
     a_y = x[lm.IV] * x[lm.IOM] / lm.G_MPS2 - x[lm.IA2]
     beta = math.atan(x[-1] * a_y)
     direction = math.atan2(step[1], step[0]) - (x[lm.ITH] + 0.5 * tau * x[lm.IOM])
     assert direction == pytest.approx(beta, rel=1e-9)
     assert math.hypot(*step) == pytest.approx(tau * x[lm.IV] / math.cos(beta), rel=1e-9)
     x[-1] = 0.0
-    np.testing.assert_array_equal(lm.process_fx(x, 0.3)[:-1], lm.process_fx(x[:-1], 0.3))
+    np.testing.assert_array_equal(lm.process_fx(x, 0.3, TILT_PSD)[:-1],
+                                  lm.process_fx(x[:-1], 0.3, TILT_PSD))
 
 
 def test_lateral_slip_gain_grows_with_distance_only() -> None:

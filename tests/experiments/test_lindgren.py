@@ -12,6 +12,7 @@ import pytest
 from slipenv.contracts.frame import SensorFrame
 from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.lindgren.ekf import LindgrenEKF, LindgrenNoise, OracleSoil, Scheme
+from slipenv.estimators.lindgren.models import TILT_SIGMA_RAD
 from slipenv.experiments import experiment, lindgren
 from slipenv.experiments.lindgren import report
 from slipenv.experiments.lindgren.calibration import effective_radius_m, radius_from_recording
@@ -22,7 +23,8 @@ from slipenv.experiments.lindgren.report import finite
 from slipenv.paths import path_by_name
 
 BLOCK_REQUIRED = {
-    "mean_deviation_m": {"no_slip_model", "slip_model", "scheme3", "scheme4"},
+    "mean_deviation_m": {"no_slip_model", "slip_model", "scheme1", "scheme3", "scheme4"},
+    "deviation_from_scheme1_m": {"no_slip_model", "slip_model", "scheme3", "scheme4"},
     "nis": {"no_slip_model", "slip_model", "band"},
     "autocorr_mean": {"no_slip_model", "slip_model"},
     "dropout_final_error_m": {"no_slip_model", "slip_model", "oracle"},
@@ -51,6 +53,12 @@ def test_json_has_both_blocks_with_the_required_keys_and_the_papers_numbers(quic
         assert block["dropout_final_error_m"]["slip_model"] == min(
             block["slip_model_schemes_final_error_m"].values())
         assert block["mean_deviation_m"]["slip_model"] == block["mean_deviation_m"][slip]
+        assert block["deviation_from_scheme1_m"]["slip_model"] == (
+            block["deviation_from_scheme1_m"][slip])
+        # the judged circle measure is the mean error against the truth
+        assert block["mean_deviation_m"]["scheme3"] == block["circles"]["mean_deviation_m"][
+            "scheme3"]
+        assert "scheme1" not in block["deviation_from_scheme1_m"]
         assert block["nis"]["slip_model"] == block["nis"][slip]
         assert block["dropout_final_error_m"]["no_slip_model"] == (
             block["dropout"]["final_error_m"]["scheme3"])
@@ -93,21 +101,29 @@ def test_headline_slip_model_wins_on_the_circles_against_the_truth(quick) -> Non
     does not assume; without k_β scheme 4's true error is several times larger."""
     tg = quick[0]["targets"]["headline"]
     assert tg["slip_model NIS closer to band than no_slip_model"]["met"]
+    assert tg["slip_model mean error <= 0.7 no_slip_model"]["met"]
     m = quick[1]["metrics"]["headline"]
-    true = m["circles"]["true_error_mean_m"]
+    true = m["circles"]["mean_deviation_m"]
     assert true[m["slip_model_scheme"]] <= 0.7 * true["scheme3"]
     assert true["scheme4"] < 0.5 * true["scheme4_no_lateral"]
 
 
+def test_ablation_slip_model_wins_on_the_circles_against_the_truth(quick) -> None:
+    """In the filter's own linear world the slip model is at most 0.7 x the no-slip model's
+    mean error against the truth on the circles, too."""
+    assert quick[0]["targets"]["ablation"]["slip_model mean error <= 0.7 no_slip_model"]["met"]
+
+
 @pytest.mark.xfail(strict=True, reason=(
-    "missed in the headline world since the slip model carries the lateral slip gain (quick "
-    "run, seed 0: deviation from scheme 1 0.113 m against the no-slip model's 0.108 m; full "
-    "run 0.121 against 0.089): the reference, scheme 1, has no lateral state and is itself "
-    "0.125 m off the truth; scheme 4 without k_β deviates 0.051 m from it but is 0.118 m off "
-    "the truth, against 0.023 m with k_β"))
+    "the paper's measure, missed in the headline world since the slip model carries the "
+    "lateral slip gain (quick run, seed 0: deviation from scheme 1 0.113 m against the no-slip "
+    "model's 0.107 m; full run 0.121 against 0.089): the reference, scheme 1, has no lateral "
+    "state and is itself 0.12 m off the truth; against the truth, the judged measure, the slip "
+    "model is 0.023 m off against 0.19 m (full run 0.024 against 0.173), met above"))
 def test_headline_slip_model_deviates_at_most_0_7_no_slip_model_from_scheme_1(quick) -> None:
     """Table 1: the slip model deviates at most 0.7 x the no-slip model from scheme 1."""
-    assert quick[0]["targets"]["headline"]["slip_model deviation <= 0.7 no_slip_model"]["met"]
+    tg = quick[0]["targets"]["headline"]
+    assert tg["slip_model deviation from scheme 1 <= 0.7 no_slip_model"]["met"]
 
 
 @pytest.mark.xfail(strict=True, reason=(
@@ -121,9 +137,9 @@ def test_headline_slip_model_nis_inside_the_band(quick) -> None:
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "missed in the headline world (quick run, seed 0, 12 drives: slip model 11.0 m against "
-    "the no-slip model's 17.2 m with measured per-wheel radii, ratio 0.64; full run 14.1 "
-    "against 25.7 m, 0.55; no drive diverges, 9.6-13.0 m and 11.4-18.0 m per drive): one "
+    "missed in the headline world (quick run, seed 0, 12 drives: slip model 10.9 m against "
+    "the no-slip model's 17.2 m with measured per-wheel radii, ratio 0.63; full run 14.1 "
+    "against 25.7 m, 0.55; no drive diverges, 9.5-12.9 m and 10.8-18.0 m per drive): one "
     "k_s per side cannot fit the curved law's straights and turns (the page measures the "
     "secant T/s: ~535 N m straight, ~400 N m outer wheel in the turns); the scheme-4 oracle "
     "given the calibration drive's secant ends ~6.7 m off"))
@@ -166,6 +182,23 @@ def test_ablation_slip_model_loses_most_to_the_soil_random_walk_after_the_cut(qu
     assert final["scheme4_cut_x2"] < 0.5 * final["scheme4"]
 
 
+def test_slip_model_is_overconfident_after_the_cut_only_where_the_law_is_curved(quick) -> None:
+    """The pose NEES after the laser cut: in the filter's own linear world the slip model's is
+    a few times n = 3, in the curved world several times more (one k_s per side cannot hold
+    the straights and the turns), while its tilt, unmeasured on these drives, stays within a
+    few standard deviations of the field's slope prior."""
+    head, abl = (quick[1]["metrics"][b] for b in ("headline", "ablation"))
+    n_head = head["dropout"]["nees_after_cut"][head["slip_model_scheme"]]
+    n_abl = abl["dropout"]["nees_after_cut"][abl["slip_model_scheme"]]
+    lo, hi = head["dropout"]["nees_after_cut_band_if_independent"]
+    assert lo < 3.0 < hi
+    assert hi < n_abl < 60.0
+    assert n_head > 3.0 * n_abl
+    sigma_deg = math.degrees(TILT_SIGMA_RAD)
+    for m in (head, abl):
+        assert m["dropout"]["max_tilt_deg"][m["slip_model_scheme"]] < 4.0 * sigma_deg
+
+
 def test_operating_point_sits_on_the_curves_bend(quick) -> None:
     """The headline calibration drive: the secant over the law's zero-slip slope is < 1 and
     read on Okello's curve (Eq. 21) gives x = s/B near the preset's K/L; the linear world's
@@ -186,13 +219,13 @@ def test_truth_side_metrics_and_plots(quick) -> None:
     for m in doc["metrics"].values():
         c = m["circles"]
         slip = m["slip_model_scheme"]
-        assert c["true_error_mean_m"][slip] < 0.15
+        assert c["mean_deviation_m"][slip] < 0.15
         assert c["soil_true"]["R_w_m"] == [0.283, 0.287]  # Lindgren §3.2, on soil
         drives = m["dropout"]["final_error_m_per_drive"]
         assert len(drives["scheme4"]) == lindgren.QUICK.dropout_drives
     # the no-slip model is biased on the curved law's circles
     c = doc["metrics"]["headline"]["circles"]
-    assert c["true_error_mean_m"]["scheme3"] > c["true_error_mean_m"][
+    assert c["mean_deviation_m"]["scheme3"] > c["mean_deviation_m"][
         doc["metrics"]["headline"]["slip_model_scheme"]]
     for name in ("paths.png", "dropout.png", "autocorrelation.png", "paths_ablation.png",
                  "dropout_ablation.png"):
@@ -205,9 +238,14 @@ def test_the_results_page_holds_the_command_the_table_the_blocks_and_the_figures
     page = (out / "docs" / "lindgren.md").read_text()
     assert f"`slipenv reproduce lindgren --quick --seed 0 --docs {out / 'docs'}`" in page
     m = result["metrics"]
-    no_slip = [m[b]["mean_deviation_m"]["no_slip_model"] for b in ("headline", "ablation")]
-    assert ("| mean deviation from scheme 1 [m], no_slip_model (scheme3) | 0.243 | "
-            f"{no_slip[0]:.4g} | {no_slip[1]:.4g} |") in page  # Table 1
+    no_slip = [m[b]["deviation_from_scheme1_m"]["no_slip_model"] for b in ("headline",
+                                                                          "ablation")]
+    assert ("| deviation from scheme 1 [m] (the paper's Table 1), no_slip_model (scheme3) | "
+            f"0.243 | {no_slip[0]:.4g} | {no_slip[1]:.4g} |") in page  # Table 1
+    true = [m[b]["mean_deviation_m"]["slip_model"] for b in ("headline", "ablation")]
+    assert (f"| mean error against the truth [m], slip_model | - | {true[0]:.4g} | "
+            f"{true[1]:.4g} |") in page  # the judged measure: the paper has no truth
+    assert "**Which circle measure is which.**" in page
     slip = [m[b]["dropout_final_error_m"]["slip_model"] for b in ("headline", "ablation")]
     assert (f"| final position error [m], slip_model | 0.21 | {slip[0]:.4g} | {slip[1]:.4g} |"
             in page)
@@ -435,10 +473,12 @@ def test_nis_distance_and_targets() -> None:
     assert report.nis_distance(1.6, [1.9, 2.1]) == pytest.approx(0.3)
     assert report.nis_distance(5.0, [1.9, 2.1]) == pytest.approx(2.9)
     m = {"mean_deviation_m": {"no_slip_model": 0.4, "slip_model": 0.3},
+         "deviation_from_scheme1_m": {"no_slip_model": 0.4, "slip_model": 0.2},
          "nis": {"no_slip_model": 2.5, "slip_model": 1.0, "band": [1.9, 2.1]},
          "dropout_final_error_m": {"no_slip_model": 2.0, "slip_model": 0.5, "oracle": 0.4}}
     met = {k: t["met"] for k, t in report.targets(m).items()}
-    assert met == {"slip_model deviation <= 0.7 no_slip_model": False,
+    assert met == {"slip_model mean error <= 0.7 no_slip_model": False,
+                   "slip_model deviation from scheme 1 <= 0.7 no_slip_model": True,
                    "slip_model NIS inside the 95 % band": False,
                    "slip_model NIS closer to band than no_slip_model": False,
                    "slip_model <= 0.3 no_slip_model": True,

@@ -19,6 +19,7 @@ from slipenv.terramechanics.track import (
     SHEAR_LAWS,
     cell_forces,
     decoupled_stress_pa,
+    soil_damper_forces,
     steady_track_forces,
 )
 from slipenv.vehicles.presets import tracked_patako_wong_chiang
@@ -26,7 +27,9 @@ from slipenv.vehicles.spec import TRACK_SHEAR_LAWS
 from tests.sim.conftest import hold
 from tests.terramechanics.test_track import (
     B_W,
+    DT,
     DX,
+    E_MAX,
     TAN_PHI,
     C,
     K,
@@ -38,9 +41,10 @@ from tests.terramechanics.test_track import (
 )
 
 
-def _cells(jx, jy, pressure, decoupled, e=None):
+def _cells(jx, jy, pressure, decoupled, e=None, lateral=False):
     """Forces and stiffness of one-cell tracks with cell displacement (jx, jy) (both faces),
-    the direction state along the displacement unless given."""
+    the direction state along the displacement unless given; with ``lateral`` also the
+    decoupled law's lateral stiffness."""
     jx, jy = np.asarray(jx, float), np.asarray(jy, float)
     n_t = jx.size
     j = np.zeros((2, n_t, 2))
@@ -49,7 +53,10 @@ def _cells(jx, jy, pressure, decoupled, e=None):
         e = np.stack((jx, jy)).reshape(2, n_t, 1) * 1.0
     b, c, tan_phi, k_mod = soil(n_t)
     pressure = np.broadcast_to(np.asarray(pressure, float).reshape(-1, 1), (n_t, 1)).copy()
-    (fx, fy), k = cell_forces(j, e, pressure, b, DX, c, tan_phi, k_mod, None, decoupled)
+    ky = np.full((n_t, 1), np.nan)
+    (fx, fy), k = cell_forces(j, e, pressure, b, DX, c, tan_phi, k_mod, None, decoupled, ky)
+    if lateral:
+        return fx[:, 0], fy[:, 0], k[:, 0], ky[:, 0]
     return fx[:, 0], fy[:, 0], k[:, 0]
 
 
@@ -111,25 +118,54 @@ def test_the_decoupled_stress_opposes_the_displacement_whatever_the_direction_st
     assert (np.sign(fx) == -np.sign(jx)).all() and (np.sign(fy) == -np.sign(jy)).all()
 
 
-def test_the_decoupled_stiffness_is_the_derivative_along_the_stress_and_zero_on_the_cap():
-    jx = np.array([0.0, 1e-3, 0.01, -0.02, 0.002, 0.01, 0.08])
-    jy = np.array([0.0, 2e-3, -0.004, 0.03, 0.0, 0.05, 0.09])
-    pressure = np.array([2800.0, 500.0, 2800.0, 6000.0, 1500.0, 2800.0, 2800.0])
-    fx, fy, k = _cells(jx, jy, pressure, True)
-    strength = C + pressure * TAN_PHI
-    capped = np.hypot(_janosi_force(jx, pressure), _janosi_force(jy, pressure)) > (
-        strength * B_W * DX)
-    assert capped[-1] and not capped[:-2].any()
-    assert (k[capped] == 0.0).all()
-    assert k[0] == pytest.approx(strength[0] / K * B_W * DX, rel=1e-12)
-    tau = np.hypot(fx, fy)
-    nx, ny = -fx / np.maximum(tau, 1e-300), -fy / np.maximum(tau, 1e-300)
+def test_each_decoupled_stiffness_is_its_components_derivative_by_its_own_displacement():
+    """k_x = b dx d tau_x/d j_x and k_y = b dx d tau_y/d j_y against central differences of the
+    cell force, below the Mohr-Coulomb cap (tau_max e^{-|j|/K}/K per component) and on it."""
+    jx = np.array([0.0, 1e-3, 0.01, -0.02, 0.002, 0.01, 0.08, -0.05, 0.3])
+    jy = np.array([0.0, 2e-3, -0.004, 0.03, 0.0, 0.05, 0.09, 0.02, -0.01])
+    pressure = np.array([2800.0, 500.0, 2800.0, 6000.0, 1500.0, 2800.0, 2800.0, 900.0, 4000.0])
+    fx, fy, kx, ky = _cells(jx, jy, pressure, True, lateral=True)
+    strength = (C + pressure * TAN_PHI) * B_W * DX
+    capped = np.hypot(_janosi_force(jx, pressure), _janosi_force(jy, pressure)) > strength
+    assert capped[-3:].all() and not capped[:-4].any()
+    free = ~capped
+    np.testing.assert_allclose(kx[free], strength[free] * np.exp(-np.abs(jx[free]) / K) / K,
+                               rtol=1e-12)
+    np.testing.assert_allclose(ky[free], strength[free] * np.exp(-np.abs(jy[free]) / K) / K,
+                               rtol=1e-12)
+    assert kx[0] == ky[0] == pytest.approx(strength[0] / K, rel=1e-12)
     h = 1e-8
-    fx_hi, fy_hi, _ = _cells(jx + h * nx, jy + h * ny, pressure, True)
-    fx_lo, fy_lo, _ = _cells(jx - h * nx, jy - h * ny, pressure, True)
-    slope = -((fx_hi - fx_lo) * nx + (fy_hi - fy_lo) * ny) / (2 * h)
-    free = ~capped & (tau > 0.0)
-    np.testing.assert_allclose(k[free], slope[free], rtol=1e-5)
+    slope_x = -(_cells(jx + h, jy, pressure, True)[0] - _cells(jx - h, jy, pressure, True)[0])
+    slope_y = -(_cells(jx, jy + h, pressure, True)[1] - _cells(jx, jy - h, pressure, True)[1])
+    rounding = 1e-6 * strength / K  # the differences' rounding, far below the stiffnesses
+    np.testing.assert_allclose(kx, slope_x / (2 * h), rtol=1e-5, atol=rounding.max())
+    np.testing.assert_allclose(ky, slope_y / (2 * h), rtol=1e-5, atol=rounding.max())
+    # on the cap the other component holds the strength's share: stiffer than 0, softer than free
+    assert (kx[capped] > 0.0).all() and (ky[capped] > 0.0).all()
+    assert (kx[capped] < strength[capped] * np.exp(-np.abs(jx[capped]) / K) / K).all()
+
+
+def test_decoupled_dampers_damp_each_component_with_its_own_stiffness_and_only_dissipate():
+    """Per component, critical damping 2 sqrt(k m) of that component's own spring (capped at
+    half the explicit limit m/dt): a cell with a stiff x and a saturated y spring is damped
+    along x only, whatever the stress direction."""
+    rng = np.random.default_rng(11)
+    f_shear = rng.normal(size=(2, 2, N)) * 5.0
+    kx = rng.uniform(0.0, 2e4, size=(2, N))
+    ky = rng.uniform(0.0, 2e4, size=(2, N))
+    ky[0, :3] = 0.0  # saturated lateral springs
+    dj = rng.normal(size=(2, 2, N)) * 1e-5
+    m = 0.8
+    args = (E_MAX, 1.0, m, DT)
+    assert not soil_damper_forces(np.zeros_like(dj), f_shear, kx, *args, ky).any()
+    f = soil_damper_forces(dj, f_shear, kx, *args, ky)
+    assert ((f * dj).sum(axis=0) <= 0.0).all() and ((f * dj).sum(axis=0) < 0.0).any()
+    cx = np.minimum(2.0 * np.sqrt(kx * m), 0.5 * m / DT)
+    cy = np.minimum(2.0 * np.sqrt(ky * m), 0.5 * m / DT)
+    np.testing.assert_allclose(f[0], -cx / DT * dj[0], rtol=1e-12)
+    np.testing.assert_allclose(f[1], -cy / DT * dj[1], rtol=1e-12)
+    assert not f[1, 0, :3].any()
+    assert (cx == 0.5 * m / DT).any() and (cx < 0.5 * m / DT).any()  # both sides of the cap
 
 
 def test_straight_driving_both_laws_give_wongs_track_thrust():
@@ -169,10 +205,11 @@ def test_in_a_steady_turn_the_decoupled_cells_give_the_decoupled_integrals(
 
 def test_the_decoupled_law_is_the_plain_function_the_cells_compile():
     s = C + P * TAN_PHI
-    tx, ty, k = decoupled_stress_pa(0.01, -0.02, s, K)
-    fx, fy, kc = _cells([0.01], [-0.02], P, True)
-    assert (-tx * B_W * DX, -ty * B_W * DX, k * B_W * DX) == pytest.approx(
-        (fx[0], fy[0], kc[0]), rel=1e-12)
+    for jx, jy in ((0.01, -0.02), (0.09, 0.08)):  # below the cap and on it
+        tx, ty, kx, ky = decoupled_stress_pa(jx, jy, s, K)
+        fx, fy, kcx, kcy = _cells([jx], [jy], P, True, lateral=True)
+        assert (-tx * B_W * DX, -ty * B_W * DX, kx * B_W * DX, ky * B_W * DX) == pytest.approx(
+            (fx[0], fy[0], kcx[0], kcy[0]), rel=1e-12)
 
 
 def test_the_shear_law_option_is_validated_and_named_in_the_error():

@@ -7,6 +7,8 @@ import math
 from collections.abc import Sequence
 from pathlib import Path as FsPath
 
+from slipenv.estimators.lindgren.models import TILT_SIGMA_RAD
+
 from ..docs_page import command_line, copy_figures, figure_list, markdown_table, write_page
 from .report import markdown_rows, target_lines
 from .settings import CALIBRATION_SETTLE_M, CIRCLE_RADIUS_M
@@ -44,10 +46,12 @@ state, and one the oracle with it.
   counter-clockwise at {speed:g} m/s (speed assumed: the paper gives none). Schemes 1-3, the
   slip-model schemes and the oracle (scheme 4 knowing the true R_w and the law's k_s at zero
   slip). Statistics over the clockwise arc at constant speed (as the paper), after the first
-  {settle:g} m: Table 1's mean deviation from scheme 1 and, as only a simulation can, the true
-  mean error and pose NEES; the NIS of the odometric innovations (Eq. 43) with its 95 % band,
-  exact and by Eq. 44 (Table 3); the autocorrelation ρ̄(l), Eq. 42, l = 1..{lags}, its mean,
-  variance and share inside ±1.96/√K (Table 2, Fig. 6).
+  {settle:g} m: the mean position error against the true path (`mean_deviation_m` in the
+  JSON, the measure the circles are judged on), Table 1's mean deviation from scheme 1
+  (`deviation_from_scheme1_m`, the paper's own measure, beside it) and the pose NEES; the NIS
+  of the odometric innovations (Eq. 43) with its 95 % band, exact and by Eq. 44 (Table 3);
+  the autocorrelation ρ̄(l), Eq. 42, l = 1..{lags}, its mean, variance and share inside
+  ±1.96/√K (Table 2, Fig. 6).
 - **(b) Straights with alternating 180° turns (Fig. 7)**: laser and odometers only (the
   inertial and inclinometer readings are removed from the recorded frames; the EKF skips
   them), bearings removed after {cut:g} s (the paper's time); final position error of the
@@ -57,18 +61,28 @@ state, and one the oracle with it.
   the plot.
 
 `--quick` runs the same experiments on shorter paths (1 loop each way; 3 straights).
+
+**Which circle measure is which.** The paper had no ground truth: Table 1 measures how far
+schemes 3 and 4 lie from scheme 1 (laser and inertial sensors, no slip model), its reference.
+A simulation has the truth, and this project judges on it: the circles' target (slip model
+≤ 0.7 × the no-slip model) is taken on the mean position error against the true path, the
+table's "mean error against the truth" rows. The paper's measure is kept in the rows "deviation
+from scheme 1 (the paper's Table 1)", with the paper's numbers beside it, and its target is
+listed too. The two disagree where scheme 1 is itself off the truth: it has no lateral slip
+state, so on the circles it carries the crab as an error, and a filter closer to the truth
+than scheme 1 then deviates more from it.
 """
 
 CALIBRATED = """\
 What each row's numbers were calibrated on:
 
-- **Every main row, both blocks** (mean deviation, NIS, autocorrelation, the final errors of
-  the no-slip model, the slip model and the oracle): no parameter is fitted to the block's
-  results. The no-slip filter's per-wheel radii come from a separate calibration drive; the
-  k_s prior from the vehicle's weight; every other setting is the estimator's default or the
-  paper's. The one choice made on the results is which slip-model scheme is reported as the
-  slip model (the better after the cut among those that used odometry on the circles); every
-  scheme's own values are in the ↳ rows.
+- **Every main row, both blocks** (mean error, deviation from scheme 1, NIS, autocorrelation,
+  the final errors of the no-slip model, the slip model and the oracle): no parameter is
+  fitted to the block's results. The no-slip filter's per-wheel radii come from a separate
+  calibration drive; the k_s prior from the vehicle's weight; every other setting is the
+  estimator's default or the paper's. The one choice made on the results is which
+  slip-model scheme is reported as the slip model (the better after the cut among those that
+  used odometry on the circles); every scheme's own values are in the ↳ rows.
 - **↳ with one measured radius / with the nominal (concrete) radius**: the no-slip filter with
   the calibration drive's one radius for both wheels, or the 0.275 m of concrete (§3.2).
 - **↳ with the uniform-field soil random walk**: scheme 4 told that the soil is uniform (R_w
@@ -201,9 +215,14 @@ Measured on the same headline frames:
   k_s negative through its correlation with the position, and after the cut single drives
   ended 40 m to 1 km off. The filter now skips a wheel's odometer only when its own counts
   show it spinning or locked, and keeps the soil estimate in the model's range for the
-  measured torque. Still open: the oracle with k_β has no inclinometer on these drives and
-  explains the crab by a pitch far outside the field's, which the 180° turns rotate into a
-  large slip angle.
+  measured torque.
+- **Pitch and roll without an inclinometer.** On these drives nothing measures the tilt; it
+  enters the lateral slip through the side force of a slope (a_y = v Ω / g - α2) and the 180°
+  turns rotate pitch into roll. The filter's tilt is a Gauss-Markov process that stays within
+  the field's slope prior ({tilt_prior:.1f}° std), where a random walk let it run to tens of
+  degrees. The largest tilt state of a drive, mean over the drives: {h_tilt:.1f}° for the slip
+  model, {ho_tilt:.1f}° for the oracle with k_β (ablation {a_tilt:.1f}° and {ao_tilt:.1f}°).
+  {tilt_verdict}
 - **Learning time before the cut.** With the laser cut at {cut2:g} s instead (the
   odometry-only stretch is then {after2:.0f} s instead of {after:.0f} s), scheme 4 ends
   {h4x2:.3f} m off (the scheme-4 oracle, given the law's zero-slip slope, {hox2:.3f} m).
@@ -243,10 +262,14 @@ None of it is tuned away.
 - **Under constant torque** (circles at constant speed) R_w and k_s are not separately
   observable, only R_w (1 - T / k_s): scheme 4 ends at R_w {R_est} m, k_s {k_s_est} N m
   against the true {R_true} m and the law's zero-slip slope {k_s_true} N m.
-- **The pose NEES** of the slip model is {nees4:.2f} and of the oracle {nees_o:.2f} against
-  n = 3. Candidates, not separated here: lateral slip in the turns beyond the linear
-  side-force law of k_β (the oracle has no k_β), load transfer changing k_s, torque noise
-  entering Eq. 37 as if exact.
+- **The pose NEES after the laser cut** (x, y, yaw against the truth, mean over the frames
+  after the cut and the drives) is {dn4:.0f} for the slip model and {dno:.0f} for the oracle,
+  against {dband} for independent samples; in the ablation's linear world {adn4:.1f} and
+  {adno:.1f}. {nees_verdict}
+- **The pose NEES** on the circles of the slip model is {nees4:.2f} and of the oracle
+  {nees_o:.2f} against n = 3. Candidates, not separated here: lateral slip in the turns
+  beyond the linear side-force law of k_β (the oracle has no k_β), load transfer changing
+  k_s, torque noise entering Eq. 37 as if exact.
 """
 
 
@@ -294,13 +317,17 @@ def _oracle_lateral_note(dropout: dict, final: dict) -> str:
 def verdict(block: dict, targets: dict) -> str:
     """Whether the slip model wins in a block, from its numbers and targets."""
     dev, drop = block["mean_deviation_m"], block["dropout_final_error_m"]
-    circles = targets["slip_model deviation <= 0.7 no_slip_model"]["met"]
+    dev1 = block["deviation_from_scheme1_m"]
+    circles = targets["slip_model mean error <= 0.7 no_slip_model"]["met"]
     cut = targets["slip_model <= 0.3 no_slip_model"]["met"]
     slip = block["slip_model_scheme"]
-    on_circles = (f"on the circles the slip model ({slip}) deviates {dev['slip_model']:.3f} m "
-                  f"from scheme 1 against the no-slip model's {dev['no_slip_model']:.3f} m "
-                  f"(target ≤ 0.7 ×, ratio "
-                  f"{_ratio(dev['slip_model'], dev['no_slip_model']):.2f})")
+    on_circles = (f"on the circles the slip model ({slip}) is {dev['slip_model']:.3f} m off "
+                  f"the truth on average against the no-slip model's "
+                  f"{dev['no_slip_model']:.3f} m (target ≤ 0.7 ×, ratio "
+                  f"{_ratio(dev['slip_model'], dev['no_slip_model']):.2f}; by the paper's "
+                  f"measure, the deviation from scheme 1, {dev1['slip_model']:.3f} against "
+                  f"{dev1['no_slip_model']:.3f} m, ratio "
+                  f"{_ratio(dev1['slip_model'], dev1['no_slip_model']):.2f})")
     after_cut = (f"after the laser cut it ends {drop['slip_model']:.3f} m off against the "
                  f"no-slip model's {drop['no_slip_model']:.3f} m (target ≤ 0.3 ×, ratio "
                  f"{_ratio(drop['slip_model'], drop['no_slip_model']):.2f})")
@@ -428,15 +455,29 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
                         "does not fit the turns" if hf["oracle_secant"] > 3.0 * af["oracle"]
                         else "a line through the origin at the straights' secant nearly does"),
         k_est=_fmt(soil_est["k_s"], 0), curve_note=curve_note,
-        h4_dev=c["mean_deviation_m"]["scheme4"],
-        h4nl_dev=c["mean_deviation_m"]["scheme4_no_lateral"], h4nl=hf["scheme4_no_lateral"],
-        h4_true=c["true_error_mean_m"]["scheme4"], h1_true=c["true_error_mean_m"]["scheme1"],
-        h4nl_true=c["true_error_mean_m"]["scheme4_no_lateral"],
-        a4_true=a["circles"]["true_error_mean_m"]["scheme4"],
-        a4nl_true=a["circles"]["true_error_mean_m"]["scheme4_no_lateral"],
+        h4_dev=c["deviation_from_scheme1_m"]["scheme4"],
+        h4nl_dev=c["deviation_from_scheme1_m"]["scheme4_no_lateral"],
+        h4nl=hf["scheme4_no_lateral"],
+        h4_true=c["mean_deviation_m"]["scheme4"], h1_true=c["mean_deviation_m"]["scheme1"],
+        h4nl_true=c["mean_deviation_m"]["scheme4_no_lateral"],
+        a4_true=a["circles"]["mean_deviation_m"]["scheme4"],
+        a4nl_true=a["circles"]["mean_deviation_m"]["scheme4_no_lateral"],
         a4=af["scheme4"], a4nl=af["scheme4_no_lateral"], ho_lat=hf["oracle_lateral"],
         ao_lat=af["oracle_lateral"],
         oracle_lat_note=_oracle_lateral_note(hd, hf),
+        tilt_prior=math.degrees(TILT_SIGMA_RAD), h_tilt=hd["max_tilt_deg"][slip],
+        ho_tilt=hd["max_tilt_deg"]["oracle_lateral"],
+        a_tilt=ad["max_tilt_deg"][a["slip_model_scheme"]],
+        ao_tilt=ad["max_tilt_deg"]["oracle_lateral"],
+        tilt_verdict=(
+            "The oracle's tilt still leaves the prior: its k_β runs away in the turns, with "
+            "the bearings still there (followed frame by frame on drives beside these: in the "
+            "first 180° turn), as the lateral slip takes up the odometric residual of its k_s "
+            "(the law's slope at zero slip, where the turns' outer wheel works at about half "
+            "of it), and the tilt follows through the product k_β α2: the oracle's wrong k_s "
+            "drives it, the tilt process only bounds its covariance."
+            if hd["max_tilt_deg"]["oracle_lateral"] > 3.0 * math.degrees(TILT_SIGMA_RAD)
+            else "Both stay within a few standard deviations of the prior."),
         cut2=2.0 * hd["cut_s"], h4x2=hf["scheme4_cut_x2"], hox2=hf["oracle_cut_x2"],
         after=hd["duration_s"] - hd["cut_s"],
         after2=max(hd["duration_s"] - 2.0 * hd["cut_s"], 0.0))
@@ -467,7 +508,20 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
         band_lo=band[0], band_hi=band[1],
         rho3=h["autocorr_mean"]["scheme3"], rho3_var=h["autocorr_var"]["scheme3"],
         R_est=_fmt(soil_est["R_w_m"], 4), k_s_est=_fmt(soil_est["k_s"], 0),
-        nees4=c["nees_pose"][slip], nees_o=c["nees_pose"]["oracle"])
+        nees4=c["nees_pose"][slip], nees_o=c["nees_pose"]["oracle"],
+        dn4=hd["nees_after_cut"][slip], dno=hd["nees_after_cut"]["oracle"],
+        dband="{:.2f}-{:.2f}".format(*hd["nees_after_cut_band_if_independent"]),
+        adn4=ad["nees_after_cut"][a["slip_model_scheme"]], adno=ad["nees_after_cut"]["oracle"],
+        nees_verdict=(
+            "The overconfidence comes with the curved law: where the world has the filter's "
+            "own law the slip model's NEES after the cut is a fraction of it. Its soil "
+            "constraints are not the cause: they clip k_s a few times a drive at most (counted "
+            "on drives beside these), and every update they reject leaves the covariance as "
+            "it was; one k_s per side simply cannot be right on the straights and in the "
+            "turns of a curved law, and no state carries that error."
+            if hd["nees_after_cut"][slip] > 5.0 * ad["nees_after_cut"][a["slip_model_scheme"]]
+            else "The curved law does not make it much more overconfident than the linear "
+                 "world."))
     run = "quick" if cfg["quick"] else "full"
     targets = []
     for name, tg in result["targets"].items():

@@ -41,9 +41,10 @@ from .settings import (
 )
 
 # The circle statistics reported per scheme and, under "no_slip_model" / "slip_model", for the
-# no-slip scheme and the block's slip model.
-PER_SCHEME = ("mean_deviation_m", "nis", "autocorr_mean", "autocorr_var",
-              "autocorr_share_inside", "n_samples")
+# no-slip scheme and the block's slip model: the mean error against the truth, the paper's
+# deviation from scheme 1, the odometric NIS and its whiteness.
+PER_SCHEME = ("mean_deviation_m", "deviation_from_scheme1_m", "nis", "autocorr_mean",
+              "autocorr_var", "autocorr_share_inside", "n_samples")
 
 
 @dataclass

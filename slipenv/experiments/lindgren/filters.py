@@ -13,6 +13,7 @@ import numpy as np
 from slipenv.contracts import wrap_angles
 from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.lindgren import LindgrenEKF
+from slipenv.estimators.lindgren.models import IA1, IA2
 
 from .recording import Recording, quiet_estimator
 from .settings import HEADLINE, LATERAL, LATERAL_FILTERS, Variant
@@ -30,11 +31,14 @@ class FilterRun:
         Their covariances.
     ekf : LindgrenEKF
         The filter after the pass (its innovation history and skip counts).
+    tilt : np.ndarray, shape (K, 2)
+        Its pitch and roll states (α1, α2) at every frame [rad].
     """
 
     est: np.ndarray
     P: np.ndarray
     ekf: LindgrenEKF
+    tilt: np.ndarray
 
 
 def run_filter(rec: Recording, name: str, cut_s: float = math.inf,
@@ -72,7 +76,7 @@ def run_filter(rec: Recording, name: str, cut_s: float = math.inf,
                       params=params,
                       beacons_xy=rec.beacons_xy, oracle=oracle)
     none = np.zeros(0)
-    est, cov = [], []
+    est, cov, tilt = [], [], []
     with quiet_estimator():
         for k, frame in enumerate(rec.frames):
             if count_scale is not None:
@@ -86,7 +90,8 @@ def run_filter(rec: Recording, name: str, cut_s: float = math.inf,
             e = ekf.reset(*rec.truth[0], frame) if k == 0 else ekf.update(frame)
             est.append((e.x_m, e.y_m, e.yaw_rad))
             cov.append(e.cov)
-    return FilterRun(np.array(est), np.array(cov), ekf)
+            tilt.append(ekf.x[IA1:IA2 + 1])
+    return FilterRun(np.array(est), np.array(cov), ekf, np.array(tilt))
 
 
 def no_slip_odometry(radii_m: tuple[float, float],

@@ -42,8 +42,8 @@ def plot_paths(rec, runs: dict, circ: dict, out_png: str | FsPath,
         ax.plot(rec.truth[:, 0], rec.truth[:, 1], color="k", lw=1.6, label="true path")
         ax.plot(runs[name].est[:, 0], runs[name].est[:, 1], color="C3", lw=1.0,
                 label=f"{name} estimate")
-        dev = circ["mean_deviation_m"].get(name)
-        err = circ["true_error_mean_m"][name]
+        dev = circ["deviation_from_scheme1_m"].get(name)
+        err = circ["mean_deviation_m"][name]
         note = (f"clockwise arc: true error {err:.3f} m"
                 + ("" if dev is None else f", deviation from (a) {dev:.3f} m"))
         ax.set_title(f"{title}\n{note}", fontsize=10)
