@@ -15,6 +15,7 @@ read-only ``__pycache__`` is left alone.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import pathlib
@@ -43,11 +44,9 @@ def refresh_stale_cache(entry_file: str | os.PathLike[str],
     cache_dir = entry.parent / "__pycache__"
     digest = sources_digest(entry, *(entry.parent / f for f in dependency_files))
     stamp = cache_dir / f"{entry.stem}.sources.sha256"
-    try:
+    with contextlib.suppress(OSError):  # no stamp yet: the cache's source is unknown
         if stamp.read_text() == digest:
             return False
-    except OSError:
-        pass
     stale = [p for pattern in (f"{entry.stem}.*.nbi", f"{entry.stem}.*.nbc")
              for p in cache_dir.glob(pattern)]
     try:

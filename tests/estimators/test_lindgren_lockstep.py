@@ -119,7 +119,7 @@ def test_compiled_filter_equals_its_python_text(scheme: int, lateral: bool, orac
                                                 frames: list,
                                                 monkeypatch: pytest.MonkeyPatch) -> None:
     if not ekf_module.compiled_available():
-        pytest.skip("NUMBA_DISABLE_JIT: nothing compiled to compare")
+        pytest.skip("NUMBA_DISABLE_JIT=1 runs only the Python text: no compiled filter to compare")
     compiled = run_filter(scheme, lateral, oracle, frames)
     assert as_python(monkeypatch) >= 40  # the kernel's, the models' and the observations'
     assert not isinstance(kernel.filter_frame, CPUDispatcher)

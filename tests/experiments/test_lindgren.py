@@ -190,8 +190,7 @@ def test_slip_model_is_overconfident_after_the_cut_only_where_the_law_is_curved(
     head, abl = (quick[1]["metrics"][b] for b in ("headline", "ablation"))
     n_head = head["dropout"]["nees_after_cut"][head["slip_model_scheme"]]
     n_abl = abl["dropout"]["nees_after_cut"][abl["slip_model_scheme"]]
-    lo, hi = head["dropout"]["nees_after_cut_band_if_independent"]
-    assert lo < 3.0 < hi
+    hi = head["dropout"]["nees_after_cut_band_if_independent"][1]
     assert hi < n_abl < 60.0
     assert n_head > 3.0 * n_abl
     sigma_deg = math.degrees(TILT_SIGMA_RAD)
