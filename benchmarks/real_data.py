@@ -222,7 +222,8 @@ def session_models(logs, targets: Targets | None = None) -> None:
     for log in logs:
         sessions[log.meta.data["optiodom"]["session"]].append(log)
     print("\n| session fitted on | path | runs | turned on arcs | cause (also) | parameters | "
-          "transfer inside the session (held-out error ratio) | other sessions' circle and "
+          "transfer inside the session (held-out error ratio; richer vs simpler: fall of "
+          "the held-out error ± its standard error, parts lower) | other sessions' circle and "
           "square runs: final error, nominal → session model | cut | oracle cut (width) | "
           "oracle cut (width + radii) |\n|---|---|---|---|---|---|---|---|---|---|---|")
     rows = []
@@ -242,6 +243,13 @@ def session_models(logs, targets: Targets | None = None) -> None:
         inside = "; ".join(f"{'+'.join(t['effects'])} {t['error_ratio']:.2f}"
                            + (" (worse on a part)" if t["makes_a_part_worse"] else "")
                            for t in tr.get("tested", []))
+        # the parsimony test: the richer model's fall of the held-out error (mean ± standard
+        # error over the held-out parts, on the nominal error's scale), parts it lowers
+        inside += "".join(f"; {'+'.join(v['richer'])} vs {'+'.join(v['simpler'])}: "
+                          f"{v['mean_fall']:+.3f} ± {v['standard_error']:.3f}, "
+                          f"{v['lower_on_parts']}/{v['parts']}"
+                          f"{' (kept)' if v['richer_wins'] else ''}"
+                          for v in tr.get("versus", []))
         print(f"| {name} | {path} | {len(runs)} | {_pct(arc_fraction(runs))} | {rep['cause']}"
               f"{' (' + ', '.join(rep['also']) + ')' if rep['also'] else ''} | "
               f"{params or '–'} | {inside or '–'} | {1e3 * before:.0f} → {1e3 * after:.0f} mm | "

@@ -21,3 +21,20 @@ def pytest_configure(config: pytest.Config) -> None:
     spawn = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(len(KERNELS), mp_context=spawn) as pool:
         list(pool.map(warm_up, [[name] for name in KERNELS]))
+
+
+# Modules whose module-scoped fixture runs a whole quick reproduction (15-100 s each). Run
+# first: pytest-xdist hands each worker its first tests as one block of consecutive items, so
+# these fixtures start at once, on one worker each time, instead of one of them starting near
+# the end and leaving the other worker idle while it runs.
+REPRODUCTION_MODULES = ("tests/experiments/test_lindgren.py",
+                        "tests/experiments/test_yamauchi.py",
+                        "tests/experiments/test_reina.py")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Move the reproduction modules' tests to the front, keeping every other order."""
+    def first(item: pytest.Item) -> bool:
+        return item.nodeid.split("::")[0] in REPRODUCTION_MODULES
+
+    items[:] = [i for i in items if first(i)] + [i for i in items if not first(i)]

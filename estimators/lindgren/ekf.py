@@ -19,9 +19,9 @@ odometry); filterpy's ``update`` commits at once, keeps one ``dim_z``, and deep-
 state on every call. The class here keeps the bookkeeping (validation, skips, history,
 restore); the arithmetic of a frame is one compiled call, :func:`.kernel.filter_frame`.
 
-A frame that fails validation raises ``ValueError`` before anything changes; the kernel works
-on a fresh copy of ``x`` and ``P``, so any error while processing a frame leaves the state of
-before it.
+A frame that fails validation raises ``ValueError`` before anything changes; the kernel writes
+the frame into a new state vector and only reads the old one, so any error while processing a
+frame leaves the state of before it.
 """
 
 from __future__ import annotations
@@ -48,12 +48,14 @@ logger.addHandler(logging.NullHandler())  # records reach the app's handlers, ne
 _ROUTINE_SKIPS = frozenset({"bearing_gated"})  # counted in extras['skipped'], not logged
 
 SENSORS = ("gyro", "acc", "tilt", "odo", "bearing")  # keys of LindgrenEKF.history
-_NO_BEACONS = np.zeros((0, 2))
 _NO_BEARINGS = np.zeros(0)
-_F64 = np.dtype(np.float64)
-_IX, _IY, _ITH, _IV, _IOM, _IA2 = lm.IX, lm.IY, lm.ITH, lm.IV, lm.IOM, lm.IA2
-_IRL, _IRR, _IKL, _IKR = lm.IRL, lm.IRR, lm.IKL, lm.IKR
-_N_OUT = kernel.N_OUT
+_F64 = np.dtype(np.float64)  # compared with ==: an unpickled array's dtype is another object
+_N_OUT_ROWS, _OUT_AT = kernel.N_OUT_ROWS, kernel.OUT_AT
+_S_T_STATE, _S_X, _S_COUNTS, _S_TORQUE = (kernel.S_T_STATE, kernel.S_X, kernel.S_COUNTS,
+                                          kernel.S_TORQUE)
+_R_CODE, _R_POSE, _R_SLIP_ANGLE, _R_SOIL, _R_INV_SHAPE, _R_K_BETA = (
+    kernel.R_CODE, kernel.R_POSE, kernel.R_SLIP_ANGLE, kernel.R_SOIL, kernel.R_INV_SHAPE,
+    kernel.R_K_BETA)
 _OUT_SENSORS = (("gyro", kernel.OUT_GYRO, 1), ("acc", kernel.OUT_ACC, 2),
                 ("tilt", kernel.OUT_TILT, 2), ("odo", kernel.OUT_ODO, 2))
 _ODO_SKIPS = {kernel.INVALID_SOIL: "odo_invalid_soil", kernel.TORQUE_NAN: "torque_nan",
@@ -61,9 +63,9 @@ _ODO_SKIPS = {kernel.INVALID_SOIL: "odo_invalid_soil", kernel.TORQUE_NAN: "torqu
 
 
 def _status(out: np.ndarray, m: int) -> list[int]:
-    """The status codes of a frame with m bearings from the kernel's ``out``: bearings, then
-    gyro, accelerometers, inclinometer, odometers."""
-    at = 2 * m + kernel.N_OUT_FIXED
+    """The status codes of a frame with m bearings from the kernel's ``out`` (as one vector):
+    bearings, then gyro, accelerometers, inclinometer, odometers."""
+    at = _OUT_AT + 2 * m + kernel.N_OUT_FIXED
     return [int(code) for code in out[at:at + m + 4].tolist()]
 
 
@@ -119,7 +121,9 @@ class LindgrenEKF:
         State (layout in :mod:`.models`): n = 13 for scheme 4 (R_w, k_s estimated), 15 for
         scheme 5 (R_w, k_s, 1/B), else 9; one more with the lateral slip gain k_β (last).
     P : np.ndarray, shape (n, n)
-        State covariance.
+        State covariance. ``x`` and ``P`` are read-only copies of the filter's state: an
+        array read here never changes afterwards, writing into it raises, and the filter
+        changes only when ``x`` or ``P`` is set whole.
     history : dict[str, list[tuple[float, np.ndarray, np.ndarray]]]
         Per sensor (:data:`SENSORS`), every accepted innovation as ``(t, y, S)`` (read-only).
     skipped : dict[str, int]
@@ -183,7 +187,13 @@ class LindgrenEKF:
         else:
             odo_mode = 1
         soil = lo.NO_SOIL if oracle is None else oracle.as_array()
-        cfg = np.empty(kernel.N_CFG + len(soil))
+        # the kernel's context: cfg, the beacon map and the workspaces in one array
+        n_beacons = 0 if beacons_xy is None else len(beacons_xy)
+        b_at = kernel.N_CFG + len(soil)
+        w_at = b_at + 2 * n_beacons
+        i_at = w_at + kernel.work_size(self.n)
+        ctx = np.empty(kernel.context_size(self.n, len(soil), n_beacons))
+        cfg = ctx[:b_at]
         cfg[[kernel.C_JERK_V, kernel.C_JERK_W, kernel.C_TILT_PSD, kernel.C_RADIUS_VAR,
              kernel.C_KS_VAR]] = (p.jerk_psd_v, p.jerk_psd_omega, p.tilt_psd,
                                   p.radius_var_per_m, p.k_s_rel_var_per_m)
@@ -199,36 +209,59 @@ class LindgrenEKF:
         cfg[kernel.C_KBETA_VAR] = p.lateral_slip_var_per_m
         cfg[kernel.C_INERTIAL] = float(self.uses_exteroceptive)
         cfg[kernel.C_ODO_MODE] = odo_mode
+        cfg[[kernel.C_BEACONS_AT, kernel.C_WORK_AT, kernel.C_IWORK_AT]] = b_at, w_at, i_at
         cfg[kernel.N_CFG:] = soil
-        self._cfg = cfg
-        self._beacons = _NO_BEACONS if beacons_xy is None else np.ascontiguousarray(beacons_xy)
+        if beacons_xy is not None:
+            ctx[b_at:w_at] = beacons_xy.ravel()
+        self._ctx, self._cfg = ctx, cfg
+        # the compiled predictions' and updates' temporaries, reused from frame to frame
+        self._work, self._iwork = ctx[w_at:i_at], ctx[i_at:].view(np.int64)
         self._left, self._right = list(geometry.left), list(geometry.right)
         # one wheel per side (the farm vehicle): read it directly, without averaging
         self._single = (self._left[0], self._right[0]) if len(self._left) == len(
             self._right) == 1 else None
         self._min_wheels = max(self._left + self._right) + 1
-        # the lateral specific force of Eq. 14 for the estimate, the same text as the
-        # compiled one run as Python: a compiled call from Python costs more than it does
-        self._lateral_accel_g = getattr(lm.lateral_accel_g, "py_func", lm.lateral_accel_g)
         if oracle is not None:
             r_w, k_s = oracle.wheel_radius_m, oracle.k_s
         else:  # only read when the soil is not estimated: the nominal radius, no slip model
             r_w, k_s = (geometry.wheel_radius_m,) * 2, (math.nan, math.nan)
-        self._fixed_soil_extras = {"R_wl_m": float(r_w[0]), "R_wr_m": float(r_w[1]),
-                                   "k_sl": float(k_s[0]), "k_sr": float(k_s[1])}
-        # the compiled predictions' and updates' temporaries, reused from frame to frame
-        self._work = np.empty(kernel.work_size(self.n))
-        self._iwork = np.empty(kernel.iwork_size(self.n), dtype=np.int64)
+        self._fixed_soil = float(r_w[0]), float(r_w[1]), float(k_s[0]), float(k_s[1])
         # sensors whose status is ACCEPTED in a frame where nothing is skipped
         self._n_sensors = 3 * self.uses_exteroceptive + self.uses_odometry
-        self.x = np.zeros(self.n)
-        self.P = np.eye(self.n)
+        # The state vector (layout kernel.S_*): the time the state refers to, the side-mean
+        # cumulative counts and torques (left, right) of the last frame, x and P. A frame
+        # writes the next one into the spare, which then changes place with it: nothing
+        # outside the filter sees either (x and P are read as copies).
+        self._state_size, self._p_at = kernel.state_size(self.n), _S_X + self.n
+        self._state, self._spare = np.zeros(self._state_size), np.empty(self._state_size)
+        self._state[_S_TORQUE:_S_TORQUE + 2] = math.nan
+        self._state[self._p_at:] = np.eye(self.n).ravel()
         self._clear_history()
         self.skipped: dict[str, int] = {}
         self._t: float | None = None  # time of the last frame [s]
-        self._t_state = 0.0  # time the state refers to [s]
-        self._counts = (0.0, 0.0)  # side-mean cumulative counts (left, right) at the last frame
-        self._torque = (math.nan, math.nan)  # side-mean torque (left, right) at the last frame
+
+    @property
+    def x(self) -> np.ndarray:
+        """The state (n,), a read-only copy (see the class's attributes): writing into it
+        raises instead of silently leaving the filter as it was; set ``x`` whole instead."""
+        out = self._state[_S_X:self._p_at].copy()
+        out.flags.writeable = False
+        return out
+
+    @x.setter
+    def x(self, value: np.ndarray) -> None:
+        self._state[_S_X:self._p_at] = value
+
+    @property
+    def P(self) -> np.ndarray:  # noqa: N802  (the Kalman filter's symbol)
+        """The state covariance (n, n), a read-only copy (set ``P`` whole to change it)."""
+        out = self._state[self._p_at:].reshape(self.n, self.n).copy()
+        out.flags.writeable = False
+        return out
+
+    @P.setter
+    def P(self, value: np.ndarray) -> None:  # noqa: N802
+        self._state[self._p_at:] = np.asarray(value, dtype=float).ravel()
 
     # -- start ---------------------------------------------------------------------------------
     def initial_state(self, x_m: float, y_m: float, yaw_rad: float,
@@ -269,10 +302,14 @@ class LindgrenEKF:
             raise ValueError("x must be finite and P symmetric")
         np.linalg.cholesky(P)  # raises LinAlgError unless P is positive definite
         check_frame_time(None, frame)
-        self._counts = self._side_counts(frame) if self.uses_odometry else (0.0, 0.0)
-        self.x, self.P = x, P
-        self._t = self._t_state = float(frame.t_s)
-        self._torque = self._side_torque(frame)
+        counts = self._side_counts(frame) if self.uses_odometry else (0.0, 0.0)
+        torque = self._side_torque(frame)
+        state = self._state
+        self._t = state[_S_T_STATE] = float(frame.t_s)
+        state[_S_COUNTS:_S_COUNTS + 2] = counts
+        state[_S_TORQUE:_S_TORQUE + 2] = torque
+        state[_S_X:self._p_at] = x
+        state[self._p_at:] = P.ravel()
         self._clear_history()
         self.skipped = {}
         return self.estimate()
@@ -297,67 +334,57 @@ class LindgrenEKF:
         t = float(frame.t_s)
         if not t_prev < t < math.inf:
             check_frame_time(t_prev, frame)  # raises: not finite, or not after the last frame
-        enc, trq = frame.enc_counts, frame.wheel_torque_nm
-        single = self._single
-        if (single is not None and type(enc) is np.ndarray and type(trq) is np.ndarray
-                and enc.ndim == 1 and trq.ndim == 1 and len(enc) >= self._min_wheels
-                and len(trq) >= self._min_wheels):
-            i, j = single
-            tq = trq.tolist()
-            torque = float(tq[i]), float(tq[j])
-            if self.uses_odometry:
-                c = enc.tolist()
-                counts = float(c[i]), float(c[j])
-                if not (math.isfinite(counts[0]) and math.isfinite(counts[1])):
-                    self._side_counts(frame)  # raises with the counts
-            else:
-                counts = self._counts
-        else:
-            counts = self._side_counts(frame) if self.uses_odometry else self._counts
-            torque = self._side_torque(frame)
+        try:  # one wheel per side, 1-D arrays: anything else raises here and takes the helpers
+            i, j = self._single  # type: ignore[misc]
+            c, tq = frame.enc_counts.tolist(), frame.wheel_torque_nm.tolist()
+            count_l, count_r = float(c[i]), float(c[j])
+            torque_l, torque_r = float(tq[i]), float(tq[j])
+        except (TypeError, AttributeError, IndexError):
+            count_l, count_r, torque_l, torque_r = self._readings(frame)
         n_bad = 0
         if self.uses_exteroceptive:
             bearing_z, bearing_t = frame.beacon_bearings_rad, frame.beacon_times_s
             # the usual frame's arrays go to the kernel as they are: it checks their order
-            if not (type(bearing_z) is np.ndarray and type(bearing_t) is np.ndarray
-                    and bearing_z.dtype is _F64 and bearing_t.dtype is _F64
-                    and bearing_z.ndim == 1 and bearing_t.shape == bearing_z.shape):
+            if not (type(bearing_z) is type(bearing_t) is np.ndarray
+                    and bearing_z.dtype == bearing_t.dtype == _F64
+                    and bearing_z.ndim == bearing_t.ndim == 1):
                 bearing_t, bearing_z, n_bad = self._frame_bearings(frame)
         else:
             bearing_t = bearing_z = _NO_BEARINGS
-        (a0, a1), (b0, b1) = self._torque, torque
-        t_bar_l = 0.5 * (a0 + b0) if math.isfinite(a0) else b0  # mean torque over the interval
-        t_bar_r = 0.5 * (a1 + b1) if math.isfinite(a1) else b1
-        c0, c1 = self._counts
         # Python floats: numba's dispatcher types them faster than numpy scalars
         gyro, acc_x, acc_y = (float(frame.gyro_z_rad_s), float(frame.acc_x_mps2),
                               float(frame.acc_y_mps2))
         pitch, roll = float(frame.pitch_rad), float(frame.roll_rad)
+        state, new = self._state, self._spare
         for attempt in range(2):
             m = len(bearing_t)
-            out = np.empty(3 * m + _N_OUT)  # the history keeps views into it
-            cov = np.empty((3, 3))
-            # The kernel works in place on copies: a frame that fails leaves x and P as they
-            # were.
-            x, P = self.x.copy(), self.P.copy()
-            t_state = kernel.filter_frame(
-                x, P, self._t_state, self._cfg, self._beacons, bearing_t, bearing_z, t_prev, t,
-                gyro, acc_x, acc_y, pitch, roll, counts[0] - c0, counts[1] - c1, t_bar_l,
-                t_bar_r, out, cov, self._work, self._iwork)
-            if t_state == t_state:
+            out = np.empty((m + _N_OUT_ROWS, 3))  # the history and the estimate keep views
+            r = kernel.filter_frame(state, new, self._ctx, bearing_t, bearing_z, t_prev, t,
+                                    gyro, acc_x, acc_y, pitch, roll, count_l, count_r,
+                                    torque_l, torque_r, out)
+            n_accepted = r[_R_CODE]
+            if n_accepted >= 0.0:
                 break
+            if n_accepted == kernel.BAD_COUNTS:
+                self._side_counts(frame)  # raises with the counts
+                raise RuntimeError("LindgrenEKF: the kernel rejected the frame's counts")
             if attempt:  # never: _frame_bearings returns what the kernel accepts
                 raise RuntimeError("LindgrenEKF: the kernel rejected the frame's bearings")
-            # NaN: bearings out of order or NaN, or late (then this raises)
+            # bearings out of order or NaN, or late (then this raises)
             bearing_t, bearing_z, n_bad = self._frame_bearings(frame)
-        self.x, self.P, self._t_state = x, P, t_state
-        self._t, self._counts, self._torque = t, counts, torque
+        self._state, self._spare, self._t = new, state, t
         self._frames.append((t, bearing_t, out))
-        if out[-1] == m + self._n_sensors and not n_bad:  # all accepted
+        if n_accepted == m + self._n_sensors and not n_bad:  # all accepted
             self._n_bearings_used += m
         else:
-            self._count_skips(m, _status(out, m), n_bad)
-        return self._estimate(cov)
+            self._count_skips(m, _status(out.ravel(), m), n_bad)
+        return self._estimate(r, out[:3])
+
+    def _readings(self, frame: SensorFrame) -> tuple[float, float, float, float]:
+        """Side-mean counts (NaN for the schemes without odometry) and torques, (left, right),
+        of any frame."""
+        counts = self._side_counts(frame) if self.uses_odometry else (math.nan, math.nan)
+        return (*counts, *self._side_torque(frame))
 
     def _count_skips(self, m: int, status: list[int], n_bad: int) -> None:
         """Count the frame's skipped measurements by reason (status codes of
@@ -384,9 +411,10 @@ class LindgrenEKF:
         Built on demand from the frames' raw kernel outputs (views into them), so a filter
         whose history nobody reads does not pay for it."""
         hist = self._history
-        for t, bearing_t, out in self._frames[self._n_history:]:
+        for t, bearing_t, rows in self._frames[self._n_history:]:
             m = len(bearing_t)
-            status = _status(out, m)
+            flat = rows.ravel()
+            status, out = _status(flat, m), flat[_OUT_AT:]
             for j in range(m):
                 if status[j] == kernel.ACCEPTED:
                     hist["bearing"].append((float(bearing_t[j]), out[2 * j:2 * j + 1],
@@ -400,49 +428,50 @@ class LindgrenEKF:
         return hist
 
     def predict_to(self, t_s: float) -> None:
-        """Propagate ``x`` and ``P`` to time ``t_s`` (Lindgren Eq. 6-7); no-op if not later.
-
-        ``x`` and ``P`` are replaced by new arrays, never written into."""
-        tau = t_s - self._t_state
+        """Propagate ``x`` and ``P`` to time ``t_s`` (Lindgren Eq. 6-7); no-op if not later."""
+        state, new = self._state, self._spare
+        tau = t_s - float(state[_S_T_STATE])
         if tau <= 0.0:
             return
-        x, P = self.x.copy(), self.P.copy()
-        kernel.predict_into(x, P, tau, self._cfg, self._work, self._iwork)
-        self.x, self.P, self._t_state = x, P, float(t_s)
+        new[:] = state
+        kernel.predict_into(new[_S_X:self._p_at], new[self._p_at:].reshape(self.n, self.n),
+                            tau, self._cfg, self._work, self._iwork)
+        new[_S_T_STATE] = t_s
+        self._state, self._spare = new, state
 
     def estimate(self) -> PoseEstimate:
         """The current estimate; ``extras`` holds R_w, k_s (scheme 5: Okello's B per wheel, as
         ``okello_Bl``, ``okello_Br``), with a lateral slip state ``k_beta_rad_per_g`` and the
         ``slip_angle_rad`` β̂ it gives now (also the estimate's ``slip_angle_rad``), and the
         skip counts."""
-        return self._estimate(self.P[:3, :3].copy())
+        state, p_at = self._state, self._p_at
+        cov = state[p_at:].reshape(self.n, self.n)[:3, :3].copy()
+        return self._estimate(kernel.estimate_values(state[_S_X:p_at], 0.0), cov)
 
-    def _estimate(self, cov: np.ndarray) -> PoseEstimate:
-        """:meth:`estimate` with the covariance of the pose ``cov`` (3, 3), a new array."""
-        xs = self.x.tolist()
-        v, omega = xs[_IV], xs[_IOM]
-        extras: dict[str, object]
+    def _estimate(self, r: tuple[float, ...], cov: np.ndarray) -> PoseEstimate:
+        """:meth:`estimate` from the values ``r`` of :func:`.kernel.estimate_values` and the
+        covariance of the pose ``cov`` (3, 3), an array nothing writes."""
         if self.estimates_soil:
-            extras = {"R_wl_m": xs[_IRL], "R_wr_m": xs[_IRR], "k_sl": xs[_IKL], "k_sr": xs[_IKR]}
+            r_l, r_r, k_l, k_r = r[_R_SOIL], r[_R_SOIL + 1], r[_R_SOIL + 2], r[_R_SOIL + 3]
         else:
-            extras = dict(self._fixed_soil_extras)
-        slip_angle = 0.0
+            r_l, r_r, k_l, k_r = self._fixed_soil
+        # β̂ feeds a path follower's slip-angle feed-forward (Yamauchi Eq. 10); 0 without k_β.
+        slip_angle = r[_R_SLIP_ANGLE]
+        extras: dict[str, object] = {"R_wl_m": r_l, "R_wr_m": r_r, "k_sl": k_l, "k_sr": k_r}
         if self._okello:
-            for side, b in (("okello_Bl", xs[lm.IBL]), ("okello_Br", xs[lm.IBR])):
+            for side, b in (("okello_Bl", r[_R_INV_SHAPE]), ("okello_Br", r[_R_INV_SHAPE + 1])):
                 extras[side] = 1.0 / b if b != 0.0 else math.inf
         if self.lateral_slip:
-            k_beta = xs[-1]
-            slip_angle = math.atan(k_beta * self._lateral_accel_g(v, omega, xs[_IA2]))
-            extras["k_beta_rad_per_g"] = k_beta
+            extras["k_beta_rad_per_g"] = r[_R_K_BETA]
             extras["slip_angle_rad"] = slip_angle
         skipped = self.skipped
         extras["n_bearings_used"] = self._n_bearings_used
         extras["n_skipped"] = sum(skipped.values()) if skipped else 0
         extras["skipped"] = dict(skipped)
-        # β̂ feeds a path follower's slip-angle feed-forward (Yamauchi Eq. 10); 0 without k_β.
         # construct: the frozen dataclass's __init__ cost ~2 µs a step
-        return PoseEstimate.construct(xs[_IX], xs[_IY], xs[_ITH], v, omega, slip_angle, cov,
-                                      extras)
+        p = _R_POSE  # x, y, θ, v, Ω
+        return PoseEstimate.construct(r[p], r[p + 1], r[p + 2], r[p + 3], r[p + 4], slip_angle,
+                                      cov, extras)
 
     # -- input validation ----------------------------------------------------------------------
     def _side_counts(self, frame: SensorFrame) -> tuple[float, float]:
@@ -490,8 +519,8 @@ class LindgrenEKF:
         """Times and values of the finite bearings, sorted by time, and the number of
         non-finite ones."""
         z, tb = frame.beacon_bearings_rad, frame.beacon_times_s
-        if (type(z) is np.ndarray and type(tb) is np.ndarray and z.dtype is _F64
-                and tb.dtype is _F64 and z.ndim == 1 and tb.shape == z.shape):
+        if (type(z) is np.ndarray and type(tb) is np.ndarray and z.dtype == _F64
+                and tb.dtype == _F64 and z.ndim == 1 and tb.shape == z.shape):
             if z.size == 0:
                 return _NO_BEARINGS, _NO_BEARINGS, 0
         else:

@@ -3,10 +3,11 @@ updates (Eq. 8-11) with the models of :mod:`.models` and :mod:`.observations`, c
 numba from this text.
 
 :class:`~slipenv.estimators.lindgren.ekf.LindgrenEKF` keeps the bookkeeping (frame validation,
-skip counts, innovation history, restoring the state of a failed frame) and calls
+skip counts, innovation history, the estimate) and calls
 :func:`filter_frame` once per frame: at 20 Hz a frame holds ~2.8 predictions and ~5.6 updates
 on 13 x 13 arrays, which in numpy cost the per-call overhead (~0.5 µs a call), not the
-arithmetic. One compiled call per frame runs them all in place on the filter's ``x`` and ``P``.
+arithmetic. One compiled call per frame runs them all, from the filter's state vector (time,
+last readings, ``x``, ``P``) into a new one.
 
 Numerical choices. The prediction computes the upper triangle of ``F P F' + Q`` and mirrors it,
 so P leaves it exactly symmetric. The update, with ``S = H P H' + R = L L'`` (Cholesky) and the
@@ -46,14 +47,22 @@ from slipenv.contracts.compiled_cache import refresh_stale_cache
 
 from .models import (
     G_MPS2,
+    IA2,
     IBL,
     IBR,
     IKL,
     IKR,
+    IOM,
     IRL,
+    IRR,
     ITH,
+    IV,
+    IX,
+    IY,
     N_OKELLO,
     N_SLIP,
+    lateral_accel_g,
+    lateral_index,
     process_F_into,
     process_fx_into,
     process_Q_into,
@@ -85,8 +94,23 @@ refresh_stale_cache(__file__, "models.py", "observations.py", angles.__file__)
 # from N_CFG on the oracle's soil, if any (the ``soil`` of the observation models).
 (C_JERK_V, C_JERK_W, C_TILT_PSD, C_RADIUS_VAR, C_KS_VAR, C_R_GYRO, C_R_AX, C_R_AY, C_R_TILT,
  C_R_BEARING, C_GATE, C_R_ODO, C_TRACK, C_CPR, C_RADIUS, C_MAX_SLIP, C_B_VAR,
- C_KBETA_VAR, C_INERTIAL, C_ODO_MODE) = range(20)
-N_CFG = 20
+ C_KBETA_VAR, C_INERTIAL, C_ODO_MODE, C_BEACONS_AT, C_WORK_AT, C_IWORK_AT) = range(23)
+N_CFG = 23
+# A filter's context ``ctx`` (:func:`context_size`) is ``cfg``, then at C_BEACONS_AT the beacon
+# map (x, y per beacon), at C_WORK_AT the float workspace (:func:`work_size`) and at
+# C_IWORK_AT the integer one (:func:`iwork_size`, int64 in float64 memory): one array
+# argument of filter_frame where there were four, each typed and unboxed at every call.
+
+# Layout of a filter's state vector ``state`` (:func:`state_size`): the time the state refers
+# to, the cumulative counts and the torques (left, right) of the last frame, then x (n) and
+# P (n x n, row-major).
+S_T_STATE, S_COUNTS, S_TORQUE, S_X = 0, 1, 3, 5
+
+# Layout of the estimate's values (:func:`estimate_values`), a tuple of floats: a code (what
+# filter_frame returns: the number of accepted measurements, or BAD_*), x, y, θ, v, Ω, the
+# slip angle β̂, R_w and k_s (left, right), Okello's 1/B (left, right) and k_β; NaN where the
+# state has no such entry (β̂ = 0).
+R_CODE, R_POSE, R_SLIP_ANGLE, R_SOIL, R_INV_SHAPE, R_K_BETA, N_RESULT = 0, 1, 6, 7, 11, 13, 14
 
 # Status codes of :func:`filter_frame`, per measurement.
 ACCEPTED = 1
@@ -96,12 +120,21 @@ INVALID_SOIL = -2  # odometry update that would make R_w or k_s <= 0: not applie
 TORQUE_NAN = -3
 SLIP_OUT_OF_RANGE = -4
 
-# Layout of ``out``: per bearing (y, S), then gyro (y, S), then y (2) and S (2 x 2) of the
-# accelerometers, the inclinometer and the odometers, then a status code per bearing, gyro,
-# accelerometers, inclinometer and odometers, and last the number of those codes that are
-# ACCEPTED: 3 m + N_OUT entries for m bearings, the status codes from 2 m + N_OUT_FIXED on.
+# What :func:`filter_frame` returns for a frame it leaves to the caller: counts not finite
+# (the odometric schemes), or bearings not finite, not in time order, out of the frame's
+# interval or of two lengths.
+BAD_COUNTS = -1
+BAD_BEARINGS = -2
+
+# Layout of ``out``, shape (m + N_OUT_ROWS, 3) for m bearings: its first three rows are the
+# covariance of the pose (x, y, θ) after the frame, and from entry OUT_AT of it as one
+# row-major vector come per bearing (y, S), then gyro (y, S), then y (2) and S (2 x 2) of the
+# accelerometers, the inclinometer and the odometers (at OUT_AT + 2 m + OUT_*), then a status
+# code per bearing, gyro, accelerometers, inclinometer and odometers (from
+# OUT_AT + 2 m + N_OUT_FIXED), the number of those codes that are ACCEPTED, and two unused.
+OUT_AT = 9
 OUT_GYRO, OUT_ACC, OUT_TILT, OUT_ODO, N_OUT_FIXED = 0, 2, 8, 14, 20
-N_OUT = N_OUT_FIXED + 5
+N_OUT_ROWS = (OUT_AT + N_OUT_FIXED + 5 + 2) // 3
 # filter_frame's own temporaries, at the end of ``work`` (after those of predict_into and
 # update_into): torques, y and S and R of a one- and of a two-dimensional measurement, a
 # predicted measurement h (up to 3), then (frame_work_size) its Jacobian H, up to 3 x n
@@ -134,6 +167,24 @@ def frame_work_size(n: int) -> int:
 def iwork_size(n: int) -> int:
     """Length of the integer workspace of :func:`predict_into`."""
     return n * n + n + 1
+
+
+@njit(cache=True)
+def state_size(n: int) -> int:
+    """Length of the state vector of an n-state filter (layout: ``S_*``)."""
+    return S_X + n + n * n
+
+
+@njit(cache=True)
+def state_dim(size: int) -> int:
+    """n of a state vector of ``size`` entries: the root of n² + n = size - S_X."""
+    return (int(math.sqrt(4 * (size - S_X) + 1)) - 1) // 2
+
+
+def context_size(n: int, n_soil: int, n_beacons: int) -> int:
+    """Length of the context of an n-state filter with ``n_soil`` oracle soil values and
+    ``n_beacons`` beacons (layout: ``C_*``)."""
+    return N_CFG + n_soil + 2 * n_beacons + work_size(n) + iwork_size(n)
 
 
 @njit(cache=True)
@@ -491,7 +542,8 @@ def constrain_slip(x: np.ndarray, torque: np.ndarray, max_slip: float) -> None:
         if not okello:
             continue
         s_lin = t / x[ik]
-        if not slip_law(s_lin, x[ik], x[IBL + i], True)[0] < max_slip:
+        # okello (True here) rather than a literal True: slip_law is then compiled once
+        if not slip_law(s_lin, x[ik], x[IBL + i], okello)[0] < max_slip:
             x[IBL + i] = 2.0 * okello_slip_factor_inverse(max_slip / s_lin) / s_lin
 
 
@@ -510,66 +562,125 @@ def _record(out: np.ndarray, at: int, y: np.ndarray, S: np.ndarray) -> None:
 
 
 @njit(cache=True)
-def _finish(P: np.ndarray, cov: np.ndarray, status: np.ndarray, out: np.ndarray,
-            t_state: float) -> float:
-    """The end of :func:`filter_frame`: the pose covariance into ``cov``, the number of
-    accepted measurements into ``out``'s last entry."""
-    for i in range(3):
-        for j in range(3):
-            cov[i, j] = P[i, j]
-    n_accepted = 0
+def estimate_values(x: np.ndarray, code: float) -> tuple:
+    """The values of the estimate of state ``x`` (layout: ``R_*``), after ``code``. β̂ is
+    ``atan(k_β a_y)`` with the lateral specific force of Eq. 14, the body slip angle a path
+    follower feeds forward (Yamauchi Eq. 10)."""
+    n, nan = x.shape[0], math.nan
+    ns, ik = soil_size(n), lateral_index(n)
+    slip_angle = math.atan(x[ik] * lateral_accel_g(x[IV], x[IOM], x[IA2])) if ik >= 0 else 0.0
+    k_beta = x[ik] if ik >= 0 else nan
+    r_l, r_r, k_l, k_r = (x[IRL], x[IRR], x[IKL], x[IKR]) if ns >= N_SLIP else (
+        nan, nan, nan, nan)
+    b_l, b_r = (x[IBL], x[IBR]) if ns == N_OKELLO else (nan, nan)
+    # float(): the plain Python run (NUMBA_DISABLE_JIT) gives Python floats too
+    return (float(code), float(x[IX]), float(x[IY]), float(x[ITH]), float(x[IV]),
+            float(x[IOM]), float(slip_angle), float(r_l), float(r_r), float(k_l), float(k_r),
+            float(b_l), float(b_r), float(k_beta))
+
+
+@njit(cache=True)
+def _rejected(code: float) -> tuple:
+    """What :func:`filter_frame` returns for a frame it leaves to the caller."""
+    nan = math.nan
+    return (float(code), nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan)
+
+
+@njit(cache=True)
+def _finish(x: np.ndarray, P: np.ndarray, state: np.ndarray, status: np.ndarray,
+            out: np.ndarray, cov: np.ndarray, t_state: float) -> tuple:
+    """The end of :func:`filter_frame`: the time into ``state``, the number of accepted
+    measurements after the status codes in ``out``, the pose covariance into ``cov``; returns
+    the estimate's values with that number."""
+    state[S_T_STATE] = t_state
+    n_accepted = 0.0
     for k in range(status.shape[0]):
         n_accepted += status[k] == ACCEPTED
-    out[out.shape[0] - 1] = n_accepted
-    return t_state
+    out[3 * (status.shape[0] - 4) + N_OUT_FIXED + 4] = n_accepted
+    for i in range(3):
+        for j in range(3):
+            cov[3 * i + j] = P[i, j]
+    return estimate_values(x, n_accepted)
 
 
 @njit(cache=True)
 def filter_frame(
-    x: np.ndarray, P: np.ndarray, t_state: float, cfg: np.ndarray, beacons_xy: np.ndarray,
-    bearing_t: np.ndarray, bearing_z: np.ndarray, t_prev: float, t: float, gyro_z: float,
-    acc_x: float, acc_y: float, pitch: float, roll: float, dcount_l: float, dcount_r: float,
-    torque_l: float, torque_r: float, out: np.ndarray, cov: np.ndarray, work: np.ndarray,
-    iwork: np.ndarray,
-) -> float:
-    """One frame in place on ``x`` and ``P``: each bearing at its own time (predict to it,
-    nearest-innovation association, χ²-gated update, Lindgren Eq. 17), predict to ``t``, then
-    gyro and accelerometers (Eq. 14) and inclinometer when ``cfg[C_INERTIAL]``, then
-    odometers over the frame interval τ = ``t - t_prev``: by ``cfg[C_ODO_MODE]``, Eq. 15 (0),
-    Eq. 37 (1) with the slip model of the state's layout (R_w, k_s and for 15 states Okello's
-    1/B from ``x``) or, for 9 states, the oracle's soil ``cfg[N_CFG:]``
-    ``[R_wl, R_wr, k_sl, k_sr]``; none (-1).
+    state: np.ndarray, new: np.ndarray, ctx: np.ndarray, bearing_t: np.ndarray,
+    bearing_z: np.ndarray, t_prev: float, t: float, gyro_z: float, acc_x: float, acc_y: float,
+    pitch: float, roll: float, count_l: float, count_r: float, torque_l: float,
+    torque_r: float, out_rows: np.ndarray,
+) -> tuple:
+    """One frame from the filter's ``state`` (layout ``S_*``) into ``new``, the same layout:
+    each bearing at its own time (predict to it, nearest-innovation association, χ²-gated
+    update, Lindgren Eq. 17), predict to ``t``, then gyro and accelerometers (Eq. 14) and
+    inclinometer when ``cfg[C_INERTIAL]``, then odometers over the frame interval
+    τ = ``t - t_prev``: by ``cfg[C_ODO_MODE]``, Eq. 15 (0), Eq. 37 (1) with the slip model of
+    the state's layout (R_w, k_s and for 15 states Okello's 1/B from ``x``) or, for 9 states,
+    the oracle's soil ``cfg[N_CFG:]`` ``[R_wl, R_wr, k_sl, k_sr]``; none (-1). ``cfg``, the
+    beacon map and the workspaces are the parts of ``ctx`` (``C_*``).
 
-    ``out`` (3 m + :data:`N_OUT`,) receives the innovation ``y`` and its ``S`` of each
-    accepted measurement, a status code per bearing, then gyro, accelerometers, inclinometer,
-    odometers, and the number of accepted ones (layout: ``OUT_*``); ``cov`` (3, 3) the
-    covariance of the pose (x, y, θ) after the frame. ``work`` and ``iwork`` are the
-    workspaces (:func:`work_size`, :func:`iwork_size`). Returns the time the state now refers
-    to [s]. Everything constant rides in ``cfg`` and the workspaces, and the frame's readings
-    are plain floats: this call is made at every control step, and its dispatch costs ~0.1 µs
-    per array argument it types and unboxes.
+    The odometers' counts over the interval are ``count_*`` (cumulative) less the last
+    frame's, and the torque is the mean of ``torque_*`` and the last frame's reading (the
+    reading alone where the last one is NaN); both readings go into ``new`` for the next
+    frame (the counts only in the odometric schemes).
 
-    The bearings must be finite, in time order, in the frame's interval ``(t_prev, t]``;
-    otherwise nothing is changed and the return value is NaN (the caller sorts and filters
-    them, or rejects the frame, and calls again). The check is here because a Python loop over
-    the bearings of every frame cost a tenth of the filter's step.
+    ``out_rows`` (m + :data:`N_OUT_ROWS`, 3) receives the covariance of the pose (x, y, θ)
+    after the frame, the innovation ``y`` and its ``S`` of each accepted measurement, a
+    status code per bearing, then gyro, accelerometers, inclinometer, odometers, and the
+    number of accepted ones (layout: ``OUT_*``). Returns :func:`estimate_values` of the new
+    state after that number: the caller builds the estimate from Python floats, with no
+    numpy call. The frame's readings are plain floats and everything else rides in six
+    arrays: this call is made at every control step, and its dispatch costs ~0.1 µs per
+    array argument it types and unboxes.
+
+    Returns :data:`BAD_COUNTS` (the other values NaN) when an odometric scheme's counts are
+    not finite, and :data:`BAD_BEARINGS` unless the bearings are finite, in time order, in
+    the frame's interval ``(t_prev, t]`` and as many as their times (the caller sorts and
+    filters them, or rejects the frame, and calls again); ``state`` is only read, so a frame
+    that fails leaves the filter as it was. The checks are here because a Python loop over the
+    bearings of every frame cost a tenth of the filter's step.
     """
     m = bearing_t.shape[0]
+    b_at, w_at, i_at = int(ctx[C_BEACONS_AT]), int(ctx[C_WORK_AT]), int(ctx[C_IWORK_AT])
+    cfg, soil = ctx[:b_at], ctx[N_CFG:b_at]
+    beacons_xy = ctx[b_at:w_at].reshape(((w_at - b_at) // 2, 2))
+    work, iwork = ctx[w_at:i_at], ctx[i_at:].view(np.int64)
     W, cpr, max_slip = cfg[C_TRACK], cfg[C_CPR], cfg[C_MAX_SLIP]
-    soil = cfg[N_CFG:]
     inertial, odo_mode, tau = cfg[C_INERTIAL] != 0.0, int(cfg[C_ODO_MODE]), t - t_prev
-    # the soil states, where the state has them, must stay in the model's domain
-    soil_from = IRL if soil_size(x.shape[0]) >= N_SLIP else -1
+    if odo_mode >= 0 and not (math.isfinite(count_l) and math.isfinite(count_r)):
+        return _rejected(float(BAD_COUNTS))
+    if bearing_z.shape[0] != m:
+        return _rejected(float(BAD_BEARINGS))
     last = t_prev
     for j in range(m):
         tb = bearing_t[j]
         if not (tb > t_prev and tb >= last and tb <= t and math.isfinite(bearing_z[j])):
-            return math.nan
+            return _rejected(float(BAD_BEARINGS))
         last = tb
-    status = out[2 * m + N_OUT_FIXED:out.shape[0] - 1]
+    flat = out_rows.reshape(out_rows.size)
+    cov, out = flat[:OUT_AT], flat[OUT_AT:]
+    for k in range(new.shape[0]):
+        new[k] = state[k]
+    t_state = state[S_T_STATE]
+    n = state_dim(new.shape[0])
+    x, P = new[S_X:S_X + n], new[S_X + n:].reshape((n, n))
+    dcount_l, dcount_r = count_l - state[S_COUNTS], count_r - state[S_COUNTS + 1]
+    if odo_mode >= 0:
+        new[S_COUNTS], new[S_COUNTS + 1] = count_l, count_r
+    a0, a1 = state[S_TORQUE], state[S_TORQUE + 1]
+    new[S_TORQUE], new[S_TORQUE + 1] = torque_l, torque_r
+    # the mean torque over the interval
+    torque_l = 0.5 * (a0 + torque_l) if math.isfinite(a0) else torque_l
+    torque_r = 0.5 * (a1 + torque_r) if math.isfinite(a1) else torque_r
+    # the soil states, where the state has them, must stay in the model's domain
+    soil_from = IRL if soil_size(n) >= N_SLIP else -1
+    # the inertial updates' "no soil check", -1 as a run-time value: a literal -1 made numba
+    # compile a second update_into for it (2,900 more instructions, both run every frame,
+    # and a frame's cost at an env step is mostly fetching its code)
+    no_soil = min(soil_from, -1)
+    status = out[2 * m + N_OUT_FIXED:3 * m + N_OUT_FIXED + 4]
     # the frame's temporaries live in the workspace and the models write into it: each heap
     # allocation cost about what its arithmetic did (FarmField's filter made 58 a frame)
-    n = x.shape[0]
     tmp = work[work.shape[0] - frame_work_size(n):]
     T, y1, S1, R1 = tmp[0:2], tmp[2:3], tmp[3:4], tmp[4:5].reshape((1, 1))
     y2, S2, R2 = tmp[5:7], tmp[7:11], tmp[11:15].reshape((2, 2))
@@ -601,7 +712,7 @@ def filter_frame(
             ins_H_into(x, H)
             y1[0] = gyro_z - h[2]
             R1[0, 0] = cfg[C_R_GYRO]
-            status[m] = update_into(x, P, y1, H[2:3], R1, math.inf, -1, S1, work, T, soil,
+            status[m] = update_into(x, P, y1, H[2:3], R1, math.inf, no_soil, S1, work, T, soil,
                                     max_slip)
             constrain_shape(x, P)
             _record(out, base + OUT_GYRO, y1, S1)
@@ -610,7 +721,7 @@ def filter_frame(
             ins_H_into(x, H)
             y2[0], y2[1] = acc_x / G_MPS2 - h[0], acc_y / G_MPS2 - h[1]
             _diag2_into(R2, cfg[C_R_AX], cfg[C_R_AY])
-            status[m + 1] = update_into(x, P, y2, H[0:2], R2, math.inf, -1, S2, work, T,
+            status[m + 1] = update_into(x, P, y2, H[0:2], R2, math.inf, no_soil, S2, work, T,
                                         soil, max_slip)
             constrain_shape(x, P)
             _record(out, base + OUT_ACC, y2, S2)
@@ -619,12 +730,12 @@ def filter_frame(
             tilt_H_into(x, H[0:2])
             y2[0], y2[1] = -pitch - h[0], -roll - h[1]
             _diag2_into(R2, cfg[C_R_TILT], cfg[C_R_TILT])
-            status[m + 2] = update_into(x, P, y2, H[0:2], R2, math.inf, -1, S2, work, T,
+            status[m + 2] = update_into(x, P, y2, H[0:2], R2, math.inf, no_soil, S2, work, T,
                                         soil, max_slip)
             constrain_shape(x, P)
             _record(out, base + OUT_TILT, y2, S2)
     if odo_mode < 0:
-        return _finish(P, cov, status, out, t_state)
+        return _finish(x, P, new, status, out, cov, t_state)
     h2, H2 = h[0:2], H[0:2]
     if odo_mode == 0:
         odo_hx_into(x, tau, cfg[C_RADIUS], W, cpr, h2)
@@ -632,18 +743,21 @@ def filter_frame(
     else:
         if not (math.isfinite(torque_l) and math.isfinite(torque_r)):
             status[m + 3] = TORQUE_NAN
-            return _finish(P, cov, status, out, t_state)
+            return _finish(x, P, new, status, out, cov, t_state)
         if wheels_slip_beyond(x, P, tau, dcount_l, dcount_r, W, cpr, soil, max_slip, h2,
                               H2):
             status[m + 3] = SLIP_OUT_OF_RANGE  # Eq. 24 is a small-slip model
-            return _finish(P, cov, status, out, t_state)
+            return _finish(x, P, new, status, out, cov, t_state)
         if soil_from >= 0:
             constrain_slip(x, T, max_slip)
-        s_l = wheel_slip_model(x, tau, T, W, soil, 0)[0]
-        s_r = wheel_slip_model(x, tau, T, W, soil, 1)[0]
-        if not (abs(s_l) < 1.0 and abs(s_r) < 1.0):  # the model's pole: no prediction
+        # the wheel as a loop variable: literal 0 and 1 made numba compile the slip model
+        # twice more (see no_soil)
+        pole = False
+        for side in range(2):
+            pole = pole or not abs(wheel_slip_model(x, tau, T, W, soil, side)[0]) < 1.0
+        if pole:  # the model's pole: no prediction
             status[m + 3] = SLIP_OUT_OF_RANGE
-            return _finish(P, cov, status, out, t_state)
+            return _finish(x, P, new, status, out, cov, t_state)
         odo_slip_hx_into(x, tau, T, W, cpr, soil, h2)
         odo_slip_H_into(x, tau, T, W, cpr, soil, H2)
     y2[0], y2[1] = dcount_l - h2[0], dcount_r - h2[1]
@@ -652,4 +766,4 @@ def filter_frame(
                                 max_slip)
     constrain_shape(x, P)
     _record(out, base + OUT_ODO, y2, S2)
-    return _finish(P, cov, status, out, t_state)
+    return _finish(x, P, new, status, out, cov, t_state)

@@ -174,6 +174,18 @@ def endo_slip_ratios(
     )
 
 
+def endo_n_for_direction(v_l: float, v_r: float, n: float,
+                         n_clockwise: float | None) -> float:
+    """Endo's exponent of a step turning the way the track speeds command [-]: ``n_clockwise``
+    when the right track is slower (v_r < v_l, a clockwise turn forwards or backwards), else
+    ``n``; ``n`` alone when ``n_clockwise`` is None.
+
+    The switch is continuous in the odometry: at v_l = v_r the left share is 1/2 for any n
+    (:func:`endo_left_share`), so the step's slips do not jump where the direction changes.
+    """
+    return n_clockwise if n_clockwise is not None and v_r < v_l else n
+
+
 class EndoOdometry(Gyrodometry):
     """Gyrodometry with Endo's longitudinal slip compensation and β = 0 (Yamauchi Eq. 1-8).
 
@@ -187,9 +199,15 @@ class EndoOdometry(Gyrodometry):
     geometry : OdometryGeometry
         Sprocket radius, tread (``track_width_m`` = 2d) and encoder layout.
     n : float
-        Endo's exponent [-], > 0 (:func:`.identification.fit_endo_n`).
+        Endo's exponent [-], > 0 (:func:`.identification.fit_endo_n`); with ``n_clockwise``,
+        the exponent of counter-clockwise steps only.
     speed_eps_mps : float
         Regularising track speed ε [m/s], >= 0 (module docstring).
+    n_clockwise : float or None
+        Endo's exponent of clockwise steps (right track slower than the left, v_r < v_l) [-],
+        > 0; None (default): ``n`` for both, as Eq. 8. On a slope the tracks slip differently
+        turning the nose uphill and downhill, which one n cannot express
+        (:func:`endo_n_for_direction`).
 
     Notes
     -----
@@ -203,18 +221,27 @@ class EndoOdometry(Gyrodometry):
         n: float,
         *,
         speed_eps_mps: float = DEFAULT_SPEED_EPS_MPS,
+        n_clockwise: float | None = None,
     ) -> None:
         super().__init__(geometry)
         self.n = check_endo_n(n)
+        self.n_clockwise = None if n_clockwise is None else check_endo_n(n_clockwise)
         self.speed_eps_mps = _check_eps(speed_eps_mps)
+
+    def slip_velocities(self, v_l: float, v_r: float, yaw_rate: float) -> tuple[float, float]:
+        """The step's track slip velocities ``s_l, s_r`` [m/s] from the encoder speeds and the
+        gyro rate: Eq. 7-8 in closed form (:func:`endo_slip_velocities`) with the exponent of
+        the step's turning direction."""
+        n = endo_n_for_direction(v_l, v_r, self.n, self.n_clockwise)
+        return endo_slip_velocities(v_l, v_r, yaw_rate, self.geometry.track_width_m, n,
+                                    self.speed_eps_mps)
 
     def _translation(
         self, d_left: float, d_right: float, dyaw: float, dt: float, frame: SensorFrame
     ) -> tuple[float, float, dict]:
         v_l, v_r = d_left / dt, d_right / dt
         eps = self.speed_eps_mps
-        s_l, s_r = endo_slip_velocities(v_l, v_r, dyaw / dt, self.geometry.track_width_m,
-                                        self.n, eps)
+        s_l, s_r = self.slip_velocities(v_l, v_r, dyaw / dt)
         forward_m = 0.5 * (d_left + d_right) - 0.5 * (s_l + s_r) * dt  # Eq. 1
         extras = {
             "alpha_l": slip_ratio_from_slip_velocity(s_l, v_l, eps),

@@ -128,6 +128,9 @@ class SlipCompensatedOdometry(EndoOdometry):
     max_slip_angle_rad : float
         Clip of β̂ [rad] (default 1 rad), so an extrapolating regression cannot reach π/2 where
         ``1 / cos β`` diverges.
+    n_clockwise : float or None
+        Endo's exponent of clockwise steps [-]; None: ``n`` for both turning directions
+        (:class:`~.endo.EndoOdometry`).
 
     Notes
     -----
@@ -146,8 +149,9 @@ class SlipCompensatedOdometry(EndoOdometry):
         max_rotation_radius_m: float = 1.0,
         straight_yaw_rate_rps: float | None = 0.02,
         max_slip_angle_rad: float = 1.0,
+        n_clockwise: float | None = None,
     ) -> None:
-        super().__init__(geometry, n, speed_eps_mps=speed_eps_mps)
+        super().__init__(geometry, n, speed_eps_mps=speed_eps_mps, n_clockwise=n_clockwise)
         if not callable(getattr(beta_model, "predict", None)):
             kind = type(beta_model).__name__
             raise ValueError(f"beta_model must have a predict method, got {kind}")

@@ -72,6 +72,16 @@ def _delta_se(func, theta: np.ndarray, cov: np.ndarray) -> np.ndarray:
     return np.sqrt(np.maximum(np.diag(jac @ cov @ jac.T), 0.0))
 
 
+def variance_inflation(problem: Problem) -> float:
+    """VIF = (se joint / se alone)² of the track width fitted with both wheel radii against
+    alone, on ``problem``'s segments: large (beyond ``MAX_VIF``) when the log cannot tell the
+    radius ratio from the width (its turns all have about the same wheel-speed ratio)."""
+    joint = fit(problem, GEOMETRIC)
+    alone = fit(problem, ("track_width",))
+    var_alone = float(alone.cov[0, 0])
+    return float(joint.cov[2, 2] / var_alone) if var_alone > 0 else float("inf")
+
+
 def calibration(problem: Problem, chosen: Fit | None) -> dict[str, Any] | None:
     """The calibration block of the report, or None unless ``chosen`` has a geometric effect.
 
@@ -90,10 +100,7 @@ def calibration(problem: Problem, chosen: Fit | None) -> dict[str, Any] | None:
     se_mean = 0.5 * float(np.sqrt(cov[0, 0] + cov[1, 1] + 2 * cov[0, 1]))
     scales = _scales(theta, seg)
     scales_se = _delta_se(lambda th: _scales(th, seg), theta, cov)
-    joint = fit(problem, GEOMETRIC)
-    alone = fit(problem, ("track_width",))
-    var_alone = float(alone.cov[0, 0])
-    vif = float(joint.cov[2, 2] / var_alone) if var_alone > 0 else float("inf")
+    vif = variance_inflation(problem)
     separable = vif < MAX_VIF
     ratio = theta[1] / theta[0]
     ratio_se = float(_delta_se(lambda th: np.array([th[1] / th[0]]), theta, cov)[0])

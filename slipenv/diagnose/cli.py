@@ -287,6 +287,11 @@ def summary(report: dict, seconds: float | None = None) -> str:
         part = "run" if tr["held_out_by"] == "run" else "half"
         lines.append(f"transfer (fitted on the whole paths of the others, each {part} held out "
                      f"in turn): {tr['decision']}")
+        lines += [f"  {'+'.join(v['richer'])} against {'+'.join(v['simpler'])}: held-out error "
+                  f"lower by {num(v['mean_fall'], '.3f')} ± {num(v['standard_error'], '.3f')} "
+                  f"of the nominal, on {v['lower_on_parts']}/{v['parts']} parts: "
+                  + ("kept" if v["richer_wins"] else "not kept")
+                  for v in tr.get("versus", [])]
     cal = report.get("calibration")
     if cal:
         ddc = cal["diff_drive_controller"]

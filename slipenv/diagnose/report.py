@@ -351,6 +351,15 @@ def transfer_markdown(tr: dict | None) -> list[str]:
             f"{num(max(t['drift'], t['turn_drift']), '.4f')} | "
             + ("no: worse on the held-out parts" if worse else
                "yes" if t.get("transfers") else "no: not material") + " |")
+    for v in tr.get("versus", []):
+        # the parsimony test: a richer model is kept only beyond the held-out uncertainty
+        lines += ["", f"{'+'.join(v['richer'])} against {'+'.join(v['simpler'])}: held-out "
+                  f"error lower by {num(v['mean_fall'], '.3f')} ± "
+                  f"{num(v['standard_error'], '.3f')} of the nominal error (mean ± standard "
+                  f"error over the parts), lower on {v['lower_on_parts']} of {v['parts']} "
+                  f"parts{' and' if v['lower_in_sum'] else ', not'} in sum: "
+                  + ("the richer model is kept" if v["richer_wins"] else "the simpler stays")
+                  + "."]
     lines += ["", f"Decision: {tr.get('decision', '–')}.", ""]
     return lines
 

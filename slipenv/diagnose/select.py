@@ -523,10 +523,10 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
     The geometric models (``GEOMETRIC_SETS``, and the named cause's when it is geometric)
     are fitted on the whole dead-reckoned paths of some parts of the logs (runs, or halves)
     and replayed whole over the held-out part. Among those whose transfer is material
-    (``Transfer.passes``) the simplest is kept, and a larger set only when it passes the same
-    tests against it: its held-out path error ``MIN_GAIN`` below the simpler one's, most
-    held-out parts predicted better, and the drift it removes beyond the simpler one
-    material (on parts the fits did not see, so two runs cannot be overfitted). Then:
+    (``Transfer.passes``) the simplest is kept, and a larger set only when its held-out
+    path error is lower by more than the held-out uncertainty (:func:`_richest_that_wins`;
+    on parts the fits did not see, so two runs cannot be overfitted, and without asking
+    the extra parameters to be material on their own). Then:
 
     - nothing named on the pose channel: the geometric model is named;
     - a geometric cause named: replaced by the geometric model (fitted on the whole paths:
@@ -562,14 +562,12 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
         sets.append(current.effects)
     sets.sort(key=param_count)
     tested = [horizon.transfer(problem, parts, by, s) for s in sets]
-    best = None
-    for t in tested:
-        if not t.passes(MIN_GAIN, MIN_DRIFT):
-            continue
-        if best is None or (t.after.sum() <= (1.0 - MIN_GAIN) * best.after.sum()
-                            and 2 * int(np.sum(t.after < best.after)) > t.after.size
-                            and t.drift_over(best) >= MIN_DRIFT):
-            best = t
+    shown: set[str] = (set(current.effects) if geometric_current and current is not None
+                       else set())
+    if any(not set(t.effects) <= shown and not shown <= set(t.effects) for t in tested) \
+            and not _separates(problem):
+        shown = set()  # the segments could not tell the named geometry from the other either
+    best, versus = _richest_that_wins(tested, shown)
     mine = None
     if current is not None:
         mine = next((t for t in tested if set(t.effects) == set(current.effects)), None)
@@ -578,6 +576,7 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
     info = {"held_out_by": by, "parts": len(parts),
             "tested": [{**t.as_dict(), "transfers": t.passes(MIN_GAIN, MIN_DRIFT)}
                        for t in tested],
+            **({"versus": versus} if versus else {}),
             **({"named_cause": {**mine.as_dict(), "transfers": mine.passes(MIN_GAIN, MIN_DRIFT)}}
                if mine is not None else {})}
     # (mine is None only when nothing was named)
@@ -659,6 +658,45 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
     info["decision"] = f"{'+'.join(mine.effects)} dropped: it predicts the held-out " \
         "parts worse"
     return None, info
+
+
+def _separates(problem: Problem) -> bool:
+    """Whether the held-out segments can tell the wheel-radius ratio from the track width:
+    the calibration's variance inflation below ``calibration.MAX_VIF`` (not so on a circle
+    driven one way, where both scale the turn alike)."""
+    from slipenv.diagnose.calibration import MAX_VIF, variance_inflation
+
+    return variance_inflation(problem) < MAX_VIF
+
+
+def _richest_that_wins(tested: list[horizon.Transfer], named: set[str] | None = None
+                       ) -> tuple[horizon.Transfer | None, list[dict]]:
+    """The geometric model the transfer route keeps, and the comparisons that chose it.
+
+    Only a model that transfers (``Transfer.passes``: material against the nominal model)
+    can be kept. Among those, in order of parameter count, a richer one replaces the one
+    kept so far when its held-out path error is lower by more than the held-out
+    uncertainty (``horizon.richer_wins``, with the floor ``TIE_GAIN`` of the nominal error
+    under which the short route ties two fits of one mechanism); else the simpler stays.
+
+    ``named``: the geometric cause the held-out segments named, on a log that separates
+    the radius ratio from the width (:func:`_separates`). The sets nested in it come first,
+    then the others: a set that is not nested in it (the width against the radii) is no
+    simpler in the sense that matters, so it replaces the named cause only by beating it on
+    the held-out paths; where the paths tie, the segments, which told them apart, decide."""
+    tested = sorted(tested, key=lambda t: not set(t.effects) <= (named or set()))
+    best, versus = None, []
+    for t in tested:
+        if not t.passes(MIN_GAIN, MIN_DRIFT):
+            continue
+        if best is None:
+            best = t
+            continue
+        v = t.versus(best, TIE_GAIN)
+        versus.append(v)
+        if v["richer_wins"]:
+            best = t
+    return best, versus
 
 
 def _explains(geometric: Candidate, cause: Candidate, reference: np.ndarray) -> bool:

@@ -13,7 +13,8 @@ PyBullet, composes those functions and applies the result:
 3. advance the shear displacement field j(x) and the stress-direction state, the side walls'
    penetration and berms, and the rut state;
 4. compute the cell shear forces (Janosi with Mohr-Coulomb, against the sliding velocity, or
-   Ishigami et al.'s decoupled components: ``TrackModelParams.shear_law``), the
+   Ishigami et al.'s decoupled components where the soil deforms:
+   ``TrackModelParams.shear_law``), the
    soil-spring dampers, the side-wall (bulldozing) force and the compaction resistance;
 5. apply each road wheel's share of the cells' forces *at that road wheel's contact point*, so
    the channel motor feels r sum F_x as the sprocket would; the residual yaw moment of the
@@ -134,8 +135,10 @@ class TrackModelParams:
         tau(|j|) against the sliding direction; ``"decoupled"``, Ishigami et al.'s components
         each of its own displacement, the resultant capped at the Mohr-Coulomb strength
         (``track.decoupled_stress_pa``), each component's soil damper with that component's
-        own stiffness. The vehicle's ``track_shear_law`` sets it (Patako's preset keeps the
-        resultant law: ``slipenv.vehicles.presets.tracked_patako_wong_chiang`` says why).
+        own stiffness, on the tracks whose soil deforms (``track.decoupled_cells``; the
+        resultant law on rigid ground). The vehicle's ``track_shear_law`` sets it (Patako's
+        preset keeps the resultant law: ``slipenv.vehicles.presets.tracked_patako_wong_chiang``
+        says why).
     """
 
     n_cells: int = 16

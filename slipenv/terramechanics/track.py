@@ -33,14 +33,17 @@ Shear stress (Janosi & Hanamoto; Wong Eq. 2.56) with Mohr-Coulomb strength (Wong
     takes each component from its own displacement, tau_x = tau_max (1 - exp(-|j_x|/K))
     sgn(j_x) and tau_y likewise, against the displacement, with the resultant capped at the
     Mohr-Coulomb strength tau_max (`decoupled_stress_pa`): a track sliding mostly sideways keeps
-    the longitudinal stress of its longitudinal displacement. The resultant law's direction is
-    carried by a short "bristle" state e per belt element, de/dt = v_j - |v_j| e/e_max (the
-    LuGre / brush-model form, Canudas de Wit et al. 1995): in sliding it aligns with v_j
-    within a sliding distance of a few e_max, so the steady forces are Wong-Chiang's (tested
-    within 5 %); at rest it is an elastic spring. A stress that jumped with the sign of v_j
-    would be an infinitely stiff damper, which an explicit step at 240 Hz cannot integrate (the
-    vehicle chatters and ratchets downhill); the decoupled law's sign is the displacement's,
-    continuous through j = 0.
+    the longitudinal stress of its longitudinal displacement. It is a law of a soil's shear
+    deformation, so it applies where the soil deforms (`decoupled_cells`: the flag that also
+    switches Bekker sinkage on); on rigid ground the contact is the tread's Coulomb friction,
+    isotropic and against the sliding velocity, and the cells keep the resultant law there.
+    The resultant law's direction is carried by a short "bristle" state e per belt element,
+    de/dt = v_j - |v_j| e/e_max (the LuGre / brush-model form, Canudas de Wit et al. 1995):
+    in sliding it aligns with v_j within a sliding distance of a few e_max, so the steady
+    forces are Wong-Chiang's (tested within 5 %); at rest it is an elastic spring. A stress
+    that jumped with the sign of v_j would be an infinitely stiff damper, which an explicit
+    step at 240 Hz cannot integrate (the vehicle chatters and ratchets downhill); the
+    decoupled law's sign is the displacement's, continuous through j = 0.
     At rest the soil springs get Kelvin-Voigt dampers on each cell's displacement rate
     (`soil_damper_forces`; LuGre's sigma_1 term), zero in any steady motion: along and across
     the stress for the resultant law (its Janosi spring and its direction spring), per
@@ -97,6 +100,7 @@ __all__ = [
     "steady_track_forces",
     "SHEAR_LAWS",
     "decoupled_stress_pa",
+    "decoupled_cells",
     "cell_forces",
     "soil_damper_forces",
     "slip_sinkage_factor",
@@ -257,6 +261,22 @@ _decoupled = njit(cache=True)(decoupled_stress_pa)
 
 
 @njit(cache=True)
+def decoupled_cells(shear_law: float, deformable: float) -> bool:
+    """Whether a track's cells take the decoupled law: ``shear_law`` (the index in
+    `SHEAR_LAWS`) names it and the soil under the track deforms (``deformable`` > 0.5, the
+    flag that switches Bekker sinkage on; a soil map may blend it).
+
+    Ishigami et al.'s components are the shear deformation of a soil layer under the contact,
+    each displacement component building its own stress (J. Field Robotics 24(3) (2007)). On
+    rigid ground there is no such layer: the stress is the tread's Coulomb friction, isotropic
+    and against the sliding velocity, Wong-Chiang's resultant law with the tread's millimetre
+    K. There the decoupled components would both saturate in a turn and point the stress along
+    a diagonal whatever the sliding direction.
+    """
+    return shear_law == 1.0 and deformable > 0.5
+
+
+@njit(cache=True)
 def advance_shear(j: np.ndarray, e: np.ndarray, v_cell: np.ndarray, belt_speed_mps: np.ndarray,
                   yaw_rate_rad_s: float, dx_m: float, dt_s: float,
                   direction_length_m: float) -> None:
@@ -402,7 +422,7 @@ def steady_track_forces(vx: float, vy: float, yaw_rate: float, y_track_m: float,
 def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: np.ndarray,
                 dx_m: float, cohesion_pa: np.ndarray, tan_phi: np.ndarray,
                 shear_modulus_m: np.ndarray, out: np.ndarray | None = None,
-                decoupled: bool = False,
+                decoupled: np.ndarray | None = None,
                 lateral_stiffness: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Shear force of each cell on the track and its tangent stiffness.
 
@@ -413,10 +433,11 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: 
     ``out`` when given. The stiffness k = b dx d tau/d|j| = b dx (q_max - tau)/K [N/m], shape
     (n_tracks, n_cells), is what :func:`soil_damper_forces` needs. The soil (``width_m``,
     ``cohesion_pa``, ``tan_phi``, ``shear_modulus_m``) is given per track, arrays of length
-    n_tracks. With ``decoupled`` the stress is Ishigami et al.'s decoupled law instead
-    (`decoupled_stress_pa`: each component of its own displacement, against j; e unused), f =
-    -tau b dx, and the stiffness is each component's own, b dx d tau_x/d j_x returned and
-    b dx d tau_y/d j_y written into ``lateral_stiffness`` (n_tracks, n_cells) when given.
+    n_tracks. On the tracks whose ``decoupled`` flag (length n_tracks, `decoupled_cells`) is
+    set the stress is Ishigami et al.'s decoupled law instead (`decoupled_stress_pa`: each
+    component of its own displacement, against j; e unused), f = -tau b dx, and the stiffness
+    is each component's own, b dx d tau_x/d j_x returned and b dx d tau_y/d j_y written into
+    ``lateral_stiffness`` (n_tracks, n_cells) when given (0 on the other tracks).
     """
     nt, nc = e.shape[1], e.shape[2]
     if out is None:
@@ -425,11 +446,12 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: 
     for i in range(nt):
         area = width_m[i] * dx_m
         spring = area / shear_modulus_m[i]
+        own = decoupled is not None and decoupled[i]
         for c in range(nc):
             jx = (j[0, i, c] + j[0, i, c + 1]) * 0.5
             jy = (j[1, i, c] + j[1, i, c + 1]) * 0.5
             strength = _strength(pressure_pa[i, c], cohesion_pa[i], tan_phi[i])
-            if decoupled:
+            if own:
                 tx, ty, kx, ky = _decoupled(jx, jy, float(strength), shear_modulus_m[i])
                 stiffness[i, c] = kx * area
                 if lateral_stiffness is not None:
@@ -437,6 +459,8 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: 
                 out[0, i, c] = -tx * area
                 out[1, i, c] = -ty * area
                 continue
+            if lateral_stiffness is not None:
+                lateral_stiffness[i, c] = 0.0
             j_abs = math.hypot(j[0, i, c] + j[0, i, c + 1], j[1, i, c] + j[1, i, c + 1]) * 0.5
             tau = _janosi(j_abs, strength, shear_modulus_m[i])
             stiffness[i, c] = (strength - tau) * spring
@@ -450,7 +474,8 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: 
 def soil_damper_forces(dj_m: np.ndarray, shear_force_n: np.ndarray,
                        stiffness_n_per_m: np.ndarray, direction_length_m: float,
                        damping_ratio: float, cell_mass_kg: float, dt_s: float,
-                       lateral_stiffness_n_per_m: np.ndarray | None = None) -> np.ndarray:
+                       lateral_stiffness_n_per_m: np.ndarray | None = None,
+                       decoupled: np.ndarray | None = None) -> np.ndarray:
     """Kelvin-Voigt dampers of the soil springs at rest, per cell [N], shape of ``dj_m``.
 
     The damper acts on the change ``dj_m`` (2, n_tracks, n_cells) of each cell's displacement
@@ -466,7 +491,9 @@ def soil_damper_forces(dj_m: np.ndarray, shear_force_n: np.ndarray,
     has only the across part, which is then zero. The decoupled law's (given): its springs are
     the two components, each of its own displacement, so each component of ``dj_m`` is damped
     with its own tangent, x with ``stiffness_n_per_m`` and y with ``lateral_stiffness_n_per_m``
-    (`decoupled_stress_pa`); the law has no direction spring.
+    (`decoupled_stress_pa`); the law has no direction spring. With ``decoupled`` (per track,
+    `decoupled_cells`) given too, only the flagged tracks' cells are damped per component,
+    the others as the resultant law's.
     """
     nt, nc = dj_m.shape[1], dj_m.shape[2]
     force = np.empty((2, nt, nc))
@@ -475,8 +502,9 @@ def soil_damper_forces(dj_m: np.ndarray, shear_force_n: np.ndarray,
     per_step = -1.0 / dt_s
     inv_e = 1.0 / direction_length_m
     for i in range(nt):
+        own = lateral_stiffness_n_per_m is not None and (decoupled is None or decoupled[i])
         for c in range(nc):
-            if lateral_stiffness_n_per_m is not None:
+            if own and lateral_stiffness_n_per_m is not None:
                 x_rate = min(math.sqrt(stiffness_n_per_m[i, c]) * gain, cap) * per_step
                 y_rate = min(math.sqrt(lateral_stiffness_n_per_m[i, c]) * gain, cap) * per_step
                 force[0, i, c] = dj_m[0, i, c] * x_rate
@@ -651,10 +679,11 @@ def track_substep(load_n: np.ndarray, belt_speed_mps: np.ndarray, track_speed_mp
     Steps: cell pressures from the loads (``spread``, per unit cell area); Bekker's
     sinkage times the slip-sinkage factor; the shear field and direction state
     (:func:`advance_shear`); the cell shear forces (:func:`cell_forces`, with the shear law
-    ``settings`` names) and the soil dampers on
-    the change of the cells' displacement (:func:`soil_damper_forces`); the side walls
-    (:func:`advance_wall`, :func:`wall_force_n_per_m`); the compaction resistance of each
-    track's deepest cell (`bekker.compaction_resistance_n`).
+    ``settings`` names on each track whose soil deforms, `decoupled_cells`, the resultant law
+    on rigid ground) and the soil dampers on the change of the cells' displacement
+    (:func:`soil_damper_forces`); the side walls (:func:`advance_wall`,
+    :func:`wall_force_n_per_m`); the compaction resistance of each track's deepest cell
+    (`bekker.compaction_resistance_n`).
 
     Outputs: ``out`` (6, n_tracks, n_cells): per cell the total force x, y on the track, the
     shear force x, y, the side-wall force and the damper force's magnitude [N];
@@ -679,16 +708,19 @@ def track_substep(load_n: np.ndarray, belt_speed_mps: np.ndarray, track_speed_mp
     v_cell = sliding_velocity(track_speed_mps, belt_speed_mps, lateral_speed_mps,
                               yaw_rate_rad_s, x_cell_m)
     advance_shear(j, e, v_cell, belt_speed_mps, yaw_rate_rad_s, dx, dt, settings[P_E_MAX])
-    decoupled = settings[P_SHEAR_LAW] == 1.0
+    decoupled = np.empty(nt, dtype=np.bool_)
+    for i in range(nt):
+        decoupled[i] = decoupled_cells(settings[P_SHEAR_LAW], deformable[i])
     lateral = np.empty((nt, nc))
     f_shear, stiffness = cell_forces(j, e, pressure, width, dx, soil[S_C], soil[S_TAN_PHI],
                                      soil[S_K], out[2:4], decoupled, lateral)
     dj = j[:, :, :-1] + j[:, :, 1:]
     dj -= j_old
     dj *= 0.5
-    if decoupled:
+    if decoupled.any():
         f_damp = soil_damper_forces(dj, f_shear, stiffness, settings[P_E_MAX],
-                                    settings[P_ZETA], settings[P_CELL_MASS], dt, lateral)
+                                    settings[P_ZETA], settings[P_CELL_MASS], dt, lateral,
+                                    decoupled)
     else:
         f_damp = soil_damper_forces(dj, f_shear, stiffness, settings[P_E_MAX],
                                     settings[P_ZETA], settings[P_CELL_MASS], dt)

@@ -122,11 +122,13 @@ def tracked_patako_wong_chiang() -> VehicleSpec:
     bulldozing (``slipenv.terramechanics.track``, ``slipenv.sim.track_soil``).
 
     Shear law: Wong & Chiang's resultant law (the spec's default), the stress against the
-    sliding velocity. Ishigami et al.'s decoupled components (``track_shear_law="decoupled"``)
-    narrow the turning-direction split of Endo's n on Yamauchi's slope, but on rigid ground,
-    where K is a millimetre, both components saturate and the stress points along a diagonal
-    whatever the sliding direction, and the vehicle no longer follows Yamauchi's circle on a
-    solid floor; it stays an option (docs/physics.md)."""
+    sliding velocity. Ishigami et al.'s decoupled components (``track_shear_law="decoupled"``,
+    applied where the soil deforms, the resultant law kept on rigid ground) narrow the
+    turning-direction split of Endo's n on Yamauchi's slope and bring the odometry within the
+    paper's reach, but on toyoura_sand they put n 0.17-0.27 above the paper's at every tilt
+    with Ishigami's K, and with K calibrated on the paper's flat-ground n still about 0.1 above it
+    at 15° while the feed-forward circle loses its advantage (Yamauchi reproduction, quick):
+    it stays an option (docs/physics.md)."""
     return dataclasses.replace(tracked_patako(track_model="wong_chiang"),
                                name="tracked_patako_wong_chiang")
 

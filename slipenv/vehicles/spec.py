@@ -236,7 +236,8 @@ class VehicleSpec:
         Shear law of the ``"wong_chiang"`` track model (`TRACK_SHEAR_LAWS`): ``"resultant"``
         (default; Wong-Chiang's tau(|j|) against the sliding direction) or ``"decoupled"``
         (Ishigami et al. 2007: each shear component of its own displacement, the resultant
-        capped at the Mohr-Coulomb strength; ``slipenv.terramechanics.track``).
+        capped at the Mohr-Coulomb strength, where the soil deforms; on rigid ground the
+        resultant law, the tread's Coulomb friction: ``slipenv.terramechanics.track``).
     pivot_axle : PivotAxleSpec | None
         A passive axle pivoting about the longitudinal axis (rocker suspension); ``None``: the
         chassis and all wheel mounts form one rigid body.

@@ -6,6 +6,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from slipenv.contracts import SensorFrame
 from slipenv.estimators.base import OdometryGeometry
 from slipenv.estimators.gyrodometry import Gyrodometry
 from slipenv.estimators.skid_steer.endo import (
@@ -138,3 +139,54 @@ def test_the_left_share_of_arrays_is_the_left_share_of_each_element():
                     for a, b in zip(v_l, v_r, strict=True)]
         np.testing.assert_allclose(shares, expected, rtol=1e-14)
         assert shares[0] == 0.5
+
+
+def turn_frames(segments, dt=0.05):
+    """Frames of consecutive constant segments (v_l, v_r, gyro, steps) on level ground, the
+    encoders continuing from one segment to the next."""
+    frames, t, angles = [], 0.0, np.zeros(2)
+    for v_l, v_r, gyro, steps in segments:
+        for _ in range(steps):
+            counts = np.rint(angles * GEOM.counts_per_rad).astype(np.int64)
+            frames.append(SensorFrame(t, counts, np.full(2, np.nan), gyro_z_rad_s=gyro,
+                                            roll_rad=0.0))
+            angles = angles + np.array([v_l, v_r]) / GEOM.wheel_radius_m * dt
+            t += dt
+    return frames
+
+
+def test_an_n_per_turning_direction_recovers_direction_dependent_slips_exactly():
+    """Tracks whose slips follow Eq. 8 with n = 0.4 turning left and n = 1.3 turning right (as
+    on a slope, turning the nose uphill and downhill): the odometry with both exponents gets
+    each step's slip ratios and forward speed (Eq. 1) exactly, one pooled n gets neither."""
+    n_ccw, n_cw, efficiency = 0.4, 1.3, 0.7
+    segments, truth = [], []
+    for v_l, v_r, n in ((0.03, 0.07, n_ccw), (0.07, 0.03, n_cw)):
+        gyro = efficiency * (v_r - v_l) / TREAD
+        s_l, s_r = endo_slip_velocities(v_l, v_r, gyro, TREAD, n)
+        segments.append((v_l, v_r, gyro, 40))
+        truth.append((endo_slip_ratios(v_l, v_r, gyro, TREAD, n),
+                      0.5 * (v_l + v_r) - 0.5 * (s_l + s_r)))
+    frames = turn_frames(segments)
+    split = run(EndoOdometry(GEOM, n_ccw, n_clockwise=n_cw), frames)
+    pooled = run(EndoOdometry(GEOM, 0.5 * (n_ccw + n_cw)), frames)
+    # steps 1-38 turn left, 41-78 right (the steps that straddle the change mix both)
+    for steps, ((alpha_l, alpha_r), v_x) in zip((split[1:38], split[41:78]), truth, strict=True):
+        for est in steps:
+            assert est.extras["alpha_l"] == pytest.approx(alpha_l, rel=1e-6)
+            assert est.extras["alpha_r"] == pytest.approx(alpha_r, rel=1e-6)
+            assert est.speed_mps == pytest.approx(v_x, rel=1e-6)
+    for steps, (_, v_x) in zip((pooled[1:38], pooled[41:78]), truth, strict=True):
+        assert abs(steps[0].speed_mps / v_x - 1.0) > 0.01  # 2.3 % and 2.2 % off
+
+
+def test_the_turning_direction_switch_does_not_move_straight_driving():
+    """At v_l = v_r the left share is 1/2 for any n, so the exponent of either direction
+    gives the same step: the switch between them is continuous."""
+    frames = turn_frames([(0.05, 0.05, 0.01, 60)])
+    split = run(EndoOdometry(GEOM, 0.3, n_clockwise=1.4), frames)
+    pooled = run(EndoOdometry(GEOM, 0.824), frames)
+    for a, b in zip(split, pooled, strict=True):
+        assert (a.x_m, a.y_m) == (pytest.approx(b.x_m, abs=1e-12), pytest.approx(b.y_m, abs=1e-12))
+    with pytest.raises(ValueError, match="n must"):
+        EndoOdometry(GEOM, 0.824, n_clockwise=0.0)

@@ -227,16 +227,32 @@ def test_odometry_update_that_would_make_k_s_negative_is_undone() -> None:
     np.testing.assert_array_equal(ekf.P, pred.P)
 
 
-def test_predict_to_replaces_the_arrays_instead_of_writing_into_them() -> None:
-    ekf = LindgrenEKF(GEOM, 4)
-    ekf.reset(0.0, 0.0, 0.0, frame(0.0, torque=(10.0, 10.0)))
-    x_old, P_old = ekf.x, ekf.P
-    x_copy, P_copy = x_old.copy(), P_old.copy()
-    ekf.predict_to(0.1)
-    assert ekf.x is not x_old and ekf.P is not P_old
-    np.testing.assert_array_equal(x_old, x_copy)
-    np.testing.assert_array_equal(P_old, P_copy)
-    assert not np.array_equal(ekf.P, P_copy)  # it did predict
+def test_what_the_filter_hands_out_never_changes_afterwards() -> None:
+    """x, P, an estimate (its covariance and extras) and the innovation history, once read,
+    stay as they were through later frames and predictions: the filter writes each frame into
+    a spare state vector and hands out copies or arrays it never writes again."""
+    run = synthetic(30)
+    ekf = LindgrenEKF(GEOM, 4, params=LindgrenNoise(lateral_slip_sigma0=3.0),
+                      beacons_xy=default_beacons_xy())
+    ekf.reset(*truth0()[:3], run.frames[0])
+    for f in run.frames[1:10]:
+        ekf.update(f)
+    est = ekf.update(run.frames[10])
+    _, y_old, S_old = ekf.history["odo"][-1]
+    handed_out = {"x": ekf.x, "P": ekf.P, "cov": est.cov, "y": y_old, "S": S_old}
+    kept = {k: v.copy() for k, v in handed_out.items()}
+    extras = dict(est.extras)
+    for f in run.frames[11:]:
+        ekf.update(f)
+    ekf.predict_to(run.frames[-1].t_s + 0.1)
+    assert not np.array_equal(ekf.P, kept["P"])  # it did move on
+    for key, array in handed_out.items():
+        np.testing.assert_array_equal(array, kept[key], err_msg=key)
+    assert est.extras == extras
+    x_set = ekf.x + 1.0  # setting x replaces the state, not the arrays read before
+    ekf.x = x_set
+    np.testing.assert_array_equal(ekf.x, x_set)
+    np.testing.assert_array_equal(handed_out["x"], kept["x"])
 
 
 def test_nan_optional_sensors_are_counted_and_logged(caplog: pytest.LogCaptureFixture) -> None:

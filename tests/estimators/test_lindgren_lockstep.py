@@ -144,7 +144,7 @@ def test_frame_does_not_read_what_its_workspace_held(scheme: int, lateral: bool,
                                                      frames: list,
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     """The frame kernel reuses one workspace frame after frame, and its models write their
-    predictions and Jacobians into it: with the workspace filled with NaN, or with huge
+    predictions and Jacobians into it: with the workspaces filled with NaN, or with huge
     numbers, before every frame, the filter must give exactly what it gives otherwise (a
     temporary read before it is written, or a Jacobian entry left from the last frame, would
     show here)."""
@@ -152,7 +152,8 @@ def test_frame_does_not_read_what_its_workspace_held(scheme: int, lateral: bool,
     frame_kernel = kernel.filter_frame
     for poison in (np.nan, -1e300):
         def poisoned(*args, poison=poison):
-            args[-2].fill(poison)  # work
+            ctx = args[2]  # the workspaces, float and integer, are its tail
+            ctx[int(ctx[kernel.C_WORK_AT]):].fill(poison)
             return frame_kernel(*args)
 
         monkeypatch.setattr(kernel, "filter_frame", poisoned)

@@ -14,17 +14,19 @@ from slipenv.envs.factory import make_force_model, make_soil_map, make_vehicle
 from slipenv.sim.simulator import Simulator
 from slipenv.sim.track_soil import TrackModelParams
 from slipenv.terrain.terrain import TerrainSpec
-from slipenv.terramechanics.presets import DRY_SAND
+from slipenv.terramechanics.presets import CONCRETE, DRY_SAND
 from slipenv.terramechanics.track import (
     SHEAR_LAWS,
     cell_forces,
+    decoupled_cells,
     decoupled_stress_pa,
     soil_damper_forces,
     steady_track_forces,
+    track_substep,
 )
 from slipenv.vehicles.presets import tracked_patako_wong_chiang
 from slipenv.vehicles.spec import TRACK_SHEAR_LAWS
-from tests.sim.conftest import hold
+from tests.sim.conftest import drive, hold
 from tests.terramechanics.test_track import (
     B_W,
     DT,
@@ -39,6 +41,7 @@ from tests.terramechanics.test_track import (
     soil,
     steady_turn,
 )
+from tests.terramechanics.test_track_compiled import _inputs
 
 
 def _cells(jx, jy, pressure, decoupled, e=None, lateral=False):
@@ -54,7 +57,8 @@ def _cells(jx, jy, pressure, decoupled, e=None, lateral=False):
     b, c, tan_phi, k_mod = soil(n_t)
     pressure = np.broadcast_to(np.asarray(pressure, float).reshape(-1, 1), (n_t, 1)).copy()
     ky = np.full((n_t, 1), np.nan)
-    (fx, fy), k = cell_forces(j, e, pressure, b, DX, c, tan_phi, k_mod, None, decoupled, ky)
+    flags = np.full(n_t, decoupled)
+    (fx, fy), k = cell_forces(j, e, pressure, b, DX, c, tan_phi, k_mod, None, flags, ky)
     if lateral:
         return fx[:, 0], fy[:, 0], k[:, 0], ky[:, 0]
     return fx[:, 0], fy[:, 0], k[:, 0]
@@ -190,7 +194,8 @@ def test_in_a_steady_turn_the_decoupled_cells_give_the_decoupled_integrals(
     less than 2 rad while the soil passes under the track (the field's own accuracy bound)."""
     omega, ys, us, j, e = steady_turn(v, radius, vy, ratio_outer, ratio_inner)
     b, c, tan_phi, k = soil(2)
-    (fx, fy), _ = cell_forces(j, e, np.full((2, N), P), b, DX, c, tan_phi, k, None, True)
+    (fx, fy), _ = cell_forces(j, e, np.full((2, N), P), b, DX, c, tan_phi, k, None,
+                              np.ones(2, dtype=bool))
     checked = 0
     for i in range(2):
         if omega * L / us[i] > 2.0:
@@ -244,3 +249,47 @@ def test_parked_on_a_15_degree_slope_with_the_decoupled_law_the_tracked_vehicle_
         assert np.linalg.norm(end - start) < 1e-3
     finally:
         sim.close()
+
+
+def test_the_decoupled_law_applies_where_the_soil_deforms_and_the_resultant_on_rigid_ground():
+    resultant, decoupled = (float(SHEAR_LAWS.index(law)) for law in ("resultant", "decoupled"))
+    assert decoupled_cells(decoupled, 1.0) and decoupled_cells(decoupled, 0.6)
+    assert not decoupled_cells(decoupled, 0.0) and not decoupled_cells(decoupled, 0.4)
+    assert not decoupled_cells(resultant, 1.0) and not decoupled_cells(resultant, 0.0)
+
+
+def test_a_substep_with_one_track_on_rigid_ground_gives_that_track_the_resultant_law():
+    """The decoupled law on a deformable and a rigid track: each track's shear forces are those
+    of the same substep with both tracks deformable under the decoupled, respectively the
+    resultant, law (sinkage and walls zeroed on the rigid track in all three runs)."""
+    def shear(law, deformable):
+        a = _inputs("both_forward", law)
+        a["deformable"] = np.array(deformable)
+        a["walls"][:] = 0.0
+        track_substep(*a.values())
+        return a["out"][2:4]
+
+    mixed = shear("decoupled", [1.0, 0.0])
+    soft, rigid = shear("decoupled", [1.0, 1.0]), shear("resultant", [1.0, 0.0])
+    np.testing.assert_array_equal(mixed[:, 0], soft[:, 0])
+    np.testing.assert_array_equal(mixed[:, 1], rigid[:, 1])
+    assert np.abs(soft[:, 1] - rigid[:, 1]).max() > 1e-3 * np.abs(rigid[:, 1]).max()
+
+
+def test_on_rigid_ground_the_decoupled_vehicle_turns_as_the_resultant_one():
+    """Concrete is not deformable: the vehicle selecting the decoupled law drives the same
+    turn as the resultant law's bit for bit (the tread's Coulomb friction, not soil shear)."""
+    poses = {}
+    for law in SHEAR_LAWS:
+        spec = dataclasses.replace(make_vehicle("tracked_patako_wong_chiang"),
+                                   track_shear_law=law)
+        sim = Simulator(spec, TerrainSpec(), make_force_model("janosi", spec),
+                        make_soil_map(CONCRETE, None))
+        try:
+            sim.reset(0.0, 0.0, 0.0)
+            truths = drive(sim, 0.05, math.radians(20.0), 2.0)
+            poses[law] = np.array([[*t.position_m, t.yaw_rad] for t in truths])
+        finally:
+            sim.close()
+    assert abs(poses["resultant"][-1, 3]) > math.radians(10.0)  # it did turn
+    np.testing.assert_array_equal(poses["decoupled"], poses["resultant"])

@@ -25,7 +25,7 @@ pages (``DIR/yamauchi_per_wheel.md``, ``DIR/yamauchi_<world>.md``).
 from .circle import LimitObservation, circle_episode, mean_episodes
 from .experiment import run
 from .model_file import MODEL_FILE, save_model
-from .odometry import TrueSlipAngle, odometry_errors, replay
+from .odometry import TrueSlipAngle, TrueSlipOdometry, odometry_errors, replay
 from .paper import PAPER
 from .rotation import InfoRecorder, RotationRun, TurnLimit, collect_runs, rotation_run, split_runs
 from .settings import ENV_ID, FULL, QUICK, STEER_ON, TARGETS, Settings
@@ -45,6 +45,7 @@ __all__ = [
     "RotationRun",
     "Settings",
     "TrueSlipAngle",
+    "TrueSlipOdometry",
     "TurnLimit",
     "circle_episode",
     "collect_runs",

@@ -35,10 +35,15 @@ SETUP = """\
    {tilts}°, turning left and right, {repeats} runs per tilt, rate and direction. Ground-truth
    slips from the simulator's body velocity and the encoders (`true_slips`, the paper's
    motion capture).
-2. **Endo's n per tilt** by log-log least squares with a 95 % interval (Eq. 8, Fig. 4).
+2. **Endo's n per tilt** by log-log least squares with a 95 % interval (Eq. 8, Fig. 4) over
+   every rotation run of the tilt, both directions, as the paper identified it ("from the
+   results shown logarithmically in Figure 4 for each condition"): the `Endo n` rows and
+   `metrics.endo_n`, the measure the paper's n is compared with.
 3. **The slip-angle regression of Eq. 9** fitted on training runs, scored on held-out runs
    (split by run, never by sample, {test_pct:.0f} % held out) against the true slip angle
-   (Fig. 5).
+   (Fig. 5). The odometry and the circle use an n fitted on the same training runs only
+   ({n_training}; `metrics.endo_n_training`), so that no held-out run reaches the odometry
+   it is scored on; the paper's split serves only Eq. 9's regression.
 4. **Gyrodometry, Endo and slip-compensated odometry** replayed on the held-out runs' sensor
    frames; position RMSE against truth (Fig. 6).
 5. **Circle r = {radius:g} m at {speed_cm:g} cm/s on {circle_tilt:g}° (§3.1, Fig. 8)** with the
@@ -55,6 +60,21 @@ The counter-clockwise model is the one the (counter-clockwise) circle uses{shipp
 (held-out improvement over gyrodometry {cw_pct:.0f} % clockwise, {ccw_pct:.0f} %
 counter-clockwise). Endo's n is fitted on both directions, as Endo's relation is symmetric in
 them.
+{n_split_paragraph}"""
+
+N_SPLIT = """
+**Endo's n per turning direction: measured beside, not used.** Fitted per tilt and turning
+direction on the training runs, Endo's n splits on the slope ({n_split}): a counter-clockwise
+rotation run turns the nose uphill, a clockwise one downhill. The slip-compensated odometry
+with that n (the direction from the sign of the track-speed difference, the step's commanded
+turn; Eq. 9 refitted on its regressors) is {split_ccw:.2f} / {split_cw:.2f} of gyrodometry
+counter-clockwise / clockwise on the held-out runs, against {pooled_ccw:.2f} / {pooled_cw:.2f}
+with the pooled n: {verdict_ccw} counter-clockwise, {verdict_cw} clockwise. The odometry keeps
+the paper's one n per tilt. Eq. 8's fit picks the n that best predicts the ratio of the two
+tracks' slips, while the position depends on their sum (the forward speed, Eq. 1): the best
+fit of the ratio need not be the best odometry. On the circle the vehicle turns one way
+through every heading, uphill and downhill, so its turning direction would not pick the n
+either.
 """
 
 LIMITS_HEAD = """\
@@ -75,10 +95,12 @@ LIMITS_MEASURED = LIMITS_HEAD + """
 - **Endo's n.** Eq. 8 has one n per tilt for both turning directions. Fitted per direction
   (counter-clockwise turns the nose uphill, clockwise downhill) it is {n_by_direction}: on a
   slope the tracks slip differently turning uphill and downhill, and the pooled n is a
-  compromise between the two.
+  compromise between the two, which moves with the runs it pools: over every rotation run
+  {n_all}, over the training runs alone {n_training}.
 - **Odometry.** The true β leaves the slip-compensated odometry at {true_beta_ratio:.2f} of
-  gyrodometry (the fitted Eq. 9: {fitted_ratio:.2f}; the paper: 0.18, target ≤ 0.4): with a
-  perfect slip-angle regression what remains is Endo's slip ratios.{n_dir_sentence}{cm_sentence}
+  gyrodometry counter-clockwise (the fitted Eq. 9: {fitted_ratio:.2f}; the paper: 0.18,
+  target ≤ 0.4): with a perfect slip-angle regression what remains is Endo's slip
+  ratios.{split_sentence}{n_dir_sentence}{cm_sentence}
 - **Circle.** On the odometry with the true β the feed-forward changes the mean error by a
   factor {true_beta_ff:.2f} against feedback, and steered on the truth with the gains tuned on
   rigid ground by {truth_ff:.2f} (the target asks ≤ 0.5); the true slip angle of the turning
@@ -151,6 +173,47 @@ def world_details(vehicle: str | None, soil: str | None) -> str:
             f"- vehicle `{v}`{': ' + model if model else ''};\n- {soil_sentence(s)}.")
 
 
+def n_split_paragraph(m: dict) -> str:
+    """The paragraph on Endo's n per turning direction, scored beside the pooled n; empty when
+    the run has no such score (one turning direction)."""
+    split = m.get("odometry_rmse_ratio_endo_n_by_direction") or {}
+    pooled = m.get("odometry_rmse_ratio") or {}
+    n_split = m.get("endo_n_training_by_direction") or {}
+    if not (split and pooled and n_split) or None in n_split.values():
+        return ""
+
+    def verdict(d: str) -> str:
+        return "better" if split[d] < pooled[d] else "worse"
+
+    return N_SPLIT.format(
+        n_split=", ".join(f"{t}° {n_split[t + '_ccw']:.2f} / {n_split[t + '_cw']:.2f}"
+                          for t in m["endo_n"]) + " counter-clockwise / clockwise",
+        split_ccw=split["ccw"], split_cw=split["cw"], pooled_ccw=pooled["ccw"],
+        pooled_cw=pooled["cw"], verdict_ccw=verdict("ccw"), verdict_cw=verdict("cw"))
+
+
+def split_sentence(lim: dict) -> str:
+    """Which part of the odometry's error is Endo's slip ratios and which Eq. 9's β, both
+    turning directions; empty without the true-slip limits."""
+    both = lim.get("odometry_ratio_to_gyrodometry_by_direction") or {}
+    if set(both) != {"ccw", "cw"} or "slip_compensated_true_slips" not in both["ccw"]:
+        return ""
+
+    def pair(key: str) -> str:
+        return f"{both['ccw'][key]:.2f} / {both['cw'][key]:.2f}"
+
+    def reached(key: str) -> str:
+        return "meets" if all(v[key] <= 0.4 for v in both.values()) else "misses"
+
+    return (" Counter-clockwise / clockwise: with Endo's slip ratios and Eq. 9's β "
+            f"{pair('slip_compensated')}; with the true β {pair('slip_compensated_true_beta')} "
+            f"(the error of Endo's slip ratios, {reached('slip_compensated_true_beta')} the "
+            "target); with the true track slips (Eq. 1 with the true forward speed, Eq. 7 with "
+            f"the gyro) and Eq. 9's β {pair('slip_compensated_true_slips')} (the error of "
+            f"Eq. 9's β, {reached('slip_compensated_true_slips')} the target); with both true "
+            f"{pair('slip_compensated_true_slips_true_beta')}, the gyro's heading error.")
+
+
 def page_body(result: dict, figures: Sequence[str], command: str) -> str:
     """The page's Markdown, every number from ``result``."""
     m, cfg = result["metrics"], result["settings"]
@@ -158,7 +221,12 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
     odo, cw = m["odometry_rmse_m"], (m.get("clockwise") or {}).get("odometry_rmse_m")
     by_dir = ", ".join(f"{k.replace('_', '° ')} {v:.2f}" if v is not None else f"{k} -"
                        for k, v in m["endo_n_by_direction"].items())
+    training = m.get("endo_n_training") or {}
     values = dict(
+        n_all=" / ".join(f"{v:.2f}" for v in m["endo_n"].values()) + " at "
+        + "/".join(m["endo_n"]) + "°",
+        n_training=(" / ".join(f"{v:.2f}" for v in training.values()) + " at "
+                    + "/".join(training) + "°") if training else "not reported",
         speed_cm=100 * cfg["speed_mps"], rates="/".join(f"{r:g}" for r in cfg["turn_rates_dps"]),
         rotation=cfg["rotation_deg"], tilts=", ".join(f"{t:g}" for t in cfg["tilts_deg"]),
         repeats=cfg["repeats"], test_pct=100 * cfg["test_fraction"],
@@ -173,16 +241,18 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
         truth_ff=lim["path_following"]["truth"]["feedforward_to_feedback_mean"],
         swing=lim["path_following"]["truth"]["feedback"]["slip_angle_swing_deg"],
     )
+    values["n_split_paragraph"] = n_split_paragraph(m)
+    values["split_sentence"] = split_sentence(lim)
     r2 = lim.get("endo_r2")
     values["n_dir_sentence"] = "" if not r2 else (
-        " Eq. 8 with the fitted n explains R² = "
+        " Eq. 8 with the n of every rotation run explains R² = "
         + ", ".join(f"{v:.2f} at {t}°" for t, v in r2.items())
         + " of the true slips' log ratio against the log speed ratio: where it is low, the "
         "ratio of the two tracks' slips does not follow a power of their speed ratio, and "
         "Endo's odometry infers the wrong slips from the gyro.")
     share = lim.get("endo_common_mode_share")
     values["cm_sentence"] = "" if not share else (
-        " Of the training samples with both slips above 1 %, "
+        " Of the rotation samples with both slips above 1 %, "
         + ", ".join(f"{100 * v:.0f} % at {t}°" for t, v in share.items())
         + " have true slips that break Eq. 8's sign rule (both tracks slipping the same way "
         "relative to their belts, a common-mode slip a ratio of the two cannot express).")

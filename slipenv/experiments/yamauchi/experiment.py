@@ -6,6 +6,7 @@ import json
 import math
 import time
 from pathlib import Path as FsPath
+from typing import Any
 
 import numpy as np
 
@@ -36,41 +37,74 @@ from .settings import (
 from .slips import fit_n, slip_run
 
 
+def score_direction(cfg: Settings, train: list, test: list, geom, direction: int,
+                    n_by_tilt: dict, n_clockwise_by_tilt: dict | None = None) -> dict:
+    """Eq. 9 fitted on the training runs turning ``direction``, scored on the held-out ones,
+    and the odometries replayed on those, with Endo's n per tilt (``n_clockwise_by_tilt``:
+    a second n for clockwise steps)."""
+    cw = n_clockwise_by_tilt or {}
+    tr = [slip_run(r, geom, n_by_tilt[r.tilt_deg], cfg, cw.get(r.tilt_deg))
+          for r in train if r.direction == direction]
+    te_runs = [r for r in test if r.direction == direction]
+    te = [slip_run(r, geom, n_by_tilt[r.tilt_deg], cfg, cw.get(r.tilt_deg)) for r in te_runs]
+    model = fit_slip_angle_runs(tr)
+    rmse = {k: float(np.sqrt(v.mean())) for k, v in
+            odometry_errors(te_runs, geom, n_by_tilt, model, n_clockwise_by_tilt).items()}
+    limits = {k: rmse.pop(k) for k in list(rmse) if k.startswith("slip_compensated_true")}
+    return {"model": model, "beta_rmse_rad": evaluate_runs(model, te), "test_runs": te_runs,
+            "odometry_rmse_m": rmse, "true_beta_rmse_m": limits["slip_compensated_true_beta"],
+            "limits_rmse_m": limits}
+
+
 def identify(cfg: Settings, train: list, test: list, geom) -> dict:
-    """Endo's n per tilt (and per turning direction, a diagnostic) and one Eq. 9 regression
-    per turning direction, scored on the held-out runs.
+    """Endo's n per tilt as the paper identified it, and one Eq. 9 regression per turning
+    direction, scored on the held-out runs.
+
+    The paper's n (§2.4, Fig. 4) comes from every rotation result of a tilt: ``fits``,
+    ``samples`` and ``n_by_direction`` (a diagnostic) pool the training and held-out runs.
+    The odometry and the circle use ``n_training``, fitted on the training runs only, so that
+    nothing of a held-out run reaches the odometry it is scored with.
 
     One regression per direction departs from the paper: on a slope part of the slip angle is
-    even in the turning direction, which Eq. 9's regressors carry only as a sign.
+    even in the turning direction, which Eq. 9's regressors carry only as a sign. Endo's n per
+    tilt and direction, also from the training runs alone (``training_fits_by_direction``),
+    is scored beside it (``by_dir[...]["n_by_direction"]``). The odometry keeps the pooled n,
+    Eq. 8's one n per tilt: on the held-out runs the per-direction n did worse turning uphill
+    (counter-clockwise) and better turning downhill (the results page gives both).
     """
-    fits, samples = {}, {}
+    runs = train + test
+    fits, samples, training = {}, {}, {}
     for t in cfg.tilts_deg:
-        fits[t], samples[t] = fit_n([r for r in train if r.tilt_deg == t], geom,
+        fits[t], samples[t] = fit_n([r for r in runs if r.tilt_deg == t], geom,
                                     cfg.smooth_steps)
-    n_by_tilt = {t: f.n for t, f in fits.items()}
-    n_by_direction = {}  # diagnostic: Endo's relation does not know which way is uphill
+        training[t] = fit_n([r for r in train if r.tilt_deg == t], geom, cfg.smooth_steps)[0]
+    n_by_tilt = {t: f.n for t, f in training.items()}
+    # diagnostic: Endo's relation does not know which way is uphill
+    n_by_direction: dict[str, Any] = {}
+    training_by_direction: dict[str, Any] = {}
     for t in cfg.tilts_deg:
         for d in cfg.directions:
-            try:
-                f = fit_n([r for r in train if r.tilt_deg == t and r.direction == d], geom,
-                          cfg.smooth_steps)[0].n
-            except ValueError:
-                f = None
-            n_by_direction[f"{t:g}_{'ccw' if d > 0 else 'cw'}"] = f
+            key = f"{t:g}_{'ccw' if d > 0 else 'cw'}"
+            for out, pool in ((n_by_direction, runs), (training_by_direction, train)):
+                try:
+                    out[key] = fit_n([r for r in pool if r.tilt_deg == t and r.direction == d],
+                                     geom, cfg.smooth_steps)[0]
+                except ValueError:
+                    out[key] = None
+    n_by_direction = {k: None if f is None else f.n for k, f in n_by_direction.items()}
     by_dir = {}
+    split = None
+    if set(cfg.directions) == {1, -1} and None not in training_by_direction.values():
+        split = ({t: training_by_direction[f"{t:g}_ccw"].n for t in cfg.tilts_deg},
+                 {t: training_by_direction[f"{t:g}_cw"].n for t in cfg.tilts_deg})
     for d in cfg.directions:
-        tr = [slip_run(r, geom, n_by_tilt[r.tilt_deg], cfg) for r in train if r.direction == d]
-        te_runs = [r for r in test if r.direction == d]
-        te = [slip_run(r, geom, n_by_tilt[r.tilt_deg], cfg) for r in te_runs]
-        model = fit_slip_angle_runs(tr)
-        rmse = {k: float(np.sqrt(v.mean()))
-                for k, v in odometry_errors(te_runs, geom, n_by_tilt, model).items()}
-        limit = rmse.pop("slip_compensated_true_beta")
-        by_dir["ccw" if d > 0 else "cw"] = {
-            "model": model, "beta_rmse_rad": evaluate_runs(model, te), "test_runs": te_runs,
-            "odometry_rmse_m": rmse, "true_beta_rmse_m": limit}
-    return {"fits": fits, "samples": samples, "n_by_tilt": n_by_tilt,
-            "n_by_direction": n_by_direction, "by_dir": by_dir}
+        entry = score_direction(cfg, train, test, geom, d, n_by_tilt)
+        if split is not None:
+            entry["n_by_direction"] = score_direction(cfg, train, test, geom, d, *split)
+        by_dir["ccw" if d > 0 else "cw"] = entry
+    return {"fits": fits, "samples": samples, "training_fits": training,
+            "n_by_tilt": n_by_tilt, "n_by_direction": n_by_direction,
+            "training_fits_by_direction": training_by_direction, "by_dir": by_dir}
 
 
 def common_mode_share(samples: dict, min_slip: float = 1e-2,
@@ -214,10 +248,18 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
 
     odo = main["odometry_rmse_m"]
     limits = {
-        "odometry_rmse_m": {"slip_compensated_true_beta": main["true_beta_rmse_m"]},
+        "odometry_rmse_m": dict(main["limits_rmse_m"]),
         "odometry_ratio_to_gyrodometry": {
             "slip_compensated": odo["slip_compensated"] / odo["gyrodometry"],
-            "slip_compensated_true_beta": main["true_beta_rmse_m"] / odo["gyrodometry"]},
+            **{k: v / odo["gyrodometry"] for k, v in main["limits_rmse_m"].items()}},
+        # the same, each turning direction: which part of the error is Endo's slip ratios
+        # (true β), which Eq. 9's slip angle (true slips); both true leaves the gyro's
+        "odometry_ratio_to_gyrodometry_by_direction": {
+            d: {"slip_compensated": v["odometry_rmse_m"]["slip_compensated"]
+                / v["odometry_rmse_m"]["gyrodometry"],
+                **{k: x / v["odometry_rmse_m"]["gyrodometry"]
+                   for k, x in v["limits_rmse_m"].items()}}
+            for d, v in by_dir.items()},
         "path_following": circle_limits,
         "endo_common_mode_share": {f"{t:g}": common_mode_share(ident["samples"][t])
                                    for t in cfg.tilts_deg},
@@ -228,6 +270,14 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
         "endo_n_ci95": {f"{t:g}": list(f.ci95) for t, f in fits.items()},
         "endo_n_samples": {f"{t:g}": f.n_samples for t, f in fits.items()},
         "endo_n_by_direction": ident["n_by_direction"],
+        "endo_n_training": {f"{t:g}": f.n for t, f in ident["training_fits"].items()},
+        "endo_n_training_ci95": {f"{t:g}": list(f.ci95)
+                                 for t, f in ident["training_fits"].items()},
+        "endo_n_training_samples": {f"{t:g}": f.n_samples
+                                    for t, f in ident["training_fits"].items()},
+        "endo_n_training_by_direction": {
+            k: None if f is None else f.n
+            for k, f in ident["training_fits_by_direction"].items()},
         "slip_angle_rmse_deg": math.degrees(main["beta_rmse_rad"]),
         "slip_angle_model": model.to_dict(),
         "odometry_rmse_m": odo,
@@ -243,6 +293,16 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
     ratios = {d: v["odometry_rmse_m"]["slip_compensated"] / v["odometry_rmse_m"]["gyrodometry"]
               for d, v in by_dir.items()}
     metrics["odometry_rmse_ratio"] = ratios
+    # Endo's n per tilt and turning direction (training runs), Eq. 9 refitted on its
+    # regressors: scored beside the pooled n the odometry keeps
+    split = {d: v["n_by_direction"] for d, v in by_dir.items() if "n_by_direction" in v}
+    metrics["endo_n_by_direction_odometry"] = {
+        d: {"odometry_rmse_m": v["odometry_rmse_m"],
+            "slip_angle_rmse_deg": math.degrees(v["beta_rmse_rad"]),
+            "true_beta_rmse_m": v["true_beta_rmse_m"]} for d, v in split.items()} or None
+    metrics["odometry_rmse_ratio_endo_n_by_direction"] = {
+        d: v["odometry_rmse_m"]["slip_compensated"] / v["odometry_rmse_m"]["gyrodometry"]
+        for d, v in split.items()} or None
     metrics["circle_mean_error_cm"] = {
         "feedback_gyrodometry": 100.0 * following["feedback_gyrodometry"]["mean_error_m"],
         "feedforward_slip_compensated": 100.0 * following["feedforward"]["mean_error_m"]}

@@ -16,6 +16,11 @@ def table_rows(result: dict) -> list[tuple[str, str, str]]:
     rows = [(f"Endo n, tilt {t}° [95 % CI]", f"{paper['endo_n'][t]:.3f}",
              f"{m['endo_n'][t]:.3f} [{m['endo_n_ci95'][t][0]:.3f}, "
              f"{m['endo_n_ci95'][t][1]:.3f}]") for t in m["endo_n"]]
+    training = m.get("endo_n_training")
+    if training:  # the n the odometry and the circle use: no held-out run in it
+        rows.append(("  same, training runs only (the odometry's and circle's n), tilt "
+                     + "/".join(training) + "°", "-",
+                     " / ".join(f"{v:.3f}" for v in training.values())))
     rows += [("slip angle RMSE, held-out runs [deg]", "(Fig. 5)",
               f"{m['slip_angle_rmse_deg']:.2f}")]
     rows += [(f"odometry RMSE {k} [m]", "-", f"{v:.4f}") for k, v in odo.items()]
@@ -26,6 +31,20 @@ def table_rows(result: dict) -> list[tuple[str, str, str]]:
         cw = m["clockwise"]["odometry_rmse_m"]
         rows.append(("  same, clockwise runs (own Eq. 9 fit)", "-",
                      f"{100 * (1 - cw['slip_compensated'] / cw['gyrodometry']):.0f} %"))
+    ratios = m.get("odometry_rmse_ratio") or {}
+    split = m.get("odometry_rmse_ratio_endo_n_by_direction")
+    if set(ratios) == {"ccw", "cw"}:
+        rows.append(("odometry RMSE slip-compensated / gyrodometry, held-out runs, ccw / cw",
+                     f"{1 - paper['odometry_improvement_vs_gyrodometry']:.2f}",
+                     f"{ratios['ccw']:.2f} / {ratios['cw']:.2f}"))
+    if split:
+        rows.append(("  same, Endo n per tilt and turning direction (training runs, Eq. 9 "
+                     "refitted on its regressors)", "-", f"{split['ccw']:.2f} / {split['cw']:.2f}"))
+    n_split = m.get("endo_n_training_by_direction") or {}
+    if n_split and None not in n_split.values():
+        rows.append(("  Endo n per turning direction ccw / cw, training runs only", "-",
+                     ", ".join(f"{t}° {n_split[t + '_ccw']:.2f} / {n_split[t + '_cw']:.2f}"
+                               for t in m["endo_n"])))
     labels = {"feedback_gyrodometry": "Eq. 9 on gyrodometry (paper's conventional)",
               "feedback": "Eq. 9 on slip-compensated odometry",
               "feedforward": "Eq. 10 (β feed-forward) on slip-compensated"}
@@ -50,13 +69,29 @@ def table_rows(result: dict) -> list[tuple[str, str, str]]:
                      "(Eq. 8 has one n for both)", "-", f"{up:.2f} / {down:.2f}"))
     share = lim.get("endo_common_mode_share")
     if share:
-        rows.append(("limit: training samples whose true slips break Eq. 8's sign (both "
+        rows.append(("limit: rotation samples whose true slips break Eq. 8's sign (both "
                      "tracks slip the same way), tilt " + "/".join(f"{t}" for t in share)
                      + "°", "-", " / ".join(f"{100 * v:.0f} %" for v in share.values())))
-    rows.append(("limit: slip-compensated with the true β, RMSE / gyrodometry", "-",
-                 f"{lim['odometry_ratio_to_gyrodometry']['slip_compensated_true_beta']:.2f}"
-                 f" (Eq. 9: {lim['odometry_ratio_to_gyrodometry']['slip_compensated']:.2f};"
+    ratio = lim["odometry_ratio_to_gyrodometry"]
+    both = lim.get("odometry_ratio_to_gyrodometry_by_direction") or {}
+    cw_lim = both.get("cw")
+    ways = ", ccw / cw" if cw_lim else ""
+
+    def ccw_cw(key: str) -> str:
+        return f"{ratio[key]:.2f}" + (f" / {cw_lim[key]:.2f}" if cw_lim else "")
+
+    rows.append(("limit: slip-compensated with the true β, RMSE / gyrodometry"
+                 + ways, "-",
+                 f"{ccw_cw('slip_compensated_true_beta')} (Eq. 9: {ccw_cw('slip_compensated')};"
                  " the rest is Endo's slip ratios)"))
+    if "slip_compensated_true_slips" in ratio:
+        rows.append(("limit: slip-compensated with the true track slips (Eq. 9's β), RMSE / "
+                     "gyrodometry" + ways, "-",
+                     f"{ccw_cw('slip_compensated_true_slips')} (the rest is Eq. 9's β)"))
+        rows.append(("limit: slip-compensated with the true track slips and the true β, RMSE "
+                     "/ gyrodometry" + ways, "-",
+                     f"{ccw_cw('slip_compensated_true_slips_true_beta')} (the gyro's heading "
+                     "error)"))
     r2 = lim.get("endo_r2")
     if r2:
         rows.append(("limit: R² of Eq. 8 (log slip ratio against n log speed ratio) on the "

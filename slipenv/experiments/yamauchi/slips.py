@@ -55,9 +55,12 @@ def fit_n(runs: list[RotationRun], geom, w: int):
     return fit_endo_n(cat["v_l"], cat["v_r"], cat["alpha_l"], cat["alpha_r"]), cat
 
 
-def slip_run(run: RotationRun, geom, n: float, cfg: Settings) -> SlipRun:
-    """Eq. 9 regressors computed online exactly as the odometry does, and the true β."""
-    _, extras = replay(SlipCompensatedOdometry(geom, n, NoSlipAngle()), run)
+def slip_run(run: RotationRun, geom, n: float, cfg: Settings,
+             n_clockwise: float | None = None) -> SlipRun:
+    """Eq. 9 regressors computed online exactly as the odometry does (with Endo's ``n``, and
+    ``n_clockwise`` on clockwise steps when given), and the true β."""
+    odometry = SlipCompensatedOdometry(geom, n, NoSlipAngle(), n_clockwise=n_clockwise)
+    _, extras = replay(odometry, run)
     x = np.array([[e["roll_rad"], e["angular_displacement_rad"], e["rotation_radius_m"]]
                   for e in extras[1:]])
     truth = run_slips(run, geom, cfg.smooth_steps)
