@@ -717,13 +717,8 @@ def track_substep(load_n: np.ndarray, belt_speed_mps: np.ndarray, track_speed_mp
     dj = j[:, :, :-1] + j[:, :, 1:]
     dj -= j_old
     dj *= 0.5
-    if decoupled.any():
-        f_damp = soil_damper_forces(dj, f_shear, stiffness, settings[P_E_MAX],
-                                    settings[P_ZETA], settings[P_CELL_MASS], dt, lateral,
-                                    decoupled)
-    else:
-        f_damp = soil_damper_forces(dj, f_shear, stiffness, settings[P_E_MAX],
-                                    settings[P_ZETA], settings[P_CELL_MASS], dt)
+    f_damp = soil_damper_forces(dj, f_shear, stiffness, settings[P_E_MAX], settings[P_ZETA],
+                                settings[P_CELL_MASS], dt, lateral, decoupled)
     advance_wall(walls, v_cell[1], track_speed_mps, sinkage_m, dx, dt)
     f_wall = wall_force_n_per_m(walls, sinkage_m, settings[P_GAMMA], soil[S_C], soil[S_PHI],
                                 settings[P_MAX_WALL])
