@@ -15,9 +15,9 @@ importing it (numba included) and its first frame, which loads the compiled code
 on-disk cache, or compiles it when the cache is cold (the first run after an install or an
 edit of the filter's source; run twice to see both). And the compiled code's heap allocations
 per frame of FarmField-v0's filter (numba's allocation statistics, in a fresh interpreter with
-``NUMBA_NRT_STATS=1``): the frame kernel's models write into the filter's workspace, so the
-count is the floor of one per array argument of ``filter_frame``, which the dispatcher wraps
-(6); a model that allocates again raises it.
+``NUMBA_NRT_STATS=1``): 0, since the frame kernel runs without numba's reference-counted
+runtime (its models write into the filter's workspace, and its array arguments are not
+wrapped in runtime records); a model that allocates would not compile in it.
 
 Each cost is the median over ``--repeats`` passes of (time for the whole pass) / (frames), in
 microseconds per control step, and next to it the fastest pass (on a loaded machine, the closer
@@ -223,7 +223,7 @@ def main(argv: list[str] | None = None) -> None:
     print(f"Lindgren EKF in a fresh interpreter: import {st['import_s']} s, first frame "
           f"{st['first_frame_s']} s (loads the compiled code from numba's cache, or compiles)")
     print(f"Lindgren EKF heap allocations per frame: {result['lindgren_allocations_per_frame']:g}"
-          " (the floor: 6, filter_frame's array arguments)")
+          " (the frame kernel runs without numba's runtime: 0)")
     print(f"{'component':<26} {'us / control step':>18} {'fastest pass':>13}")
     for name, us in result["us_per_step"].items():
         print(f"{name:<26} {us:>18.1f} {result['us_per_step_min'][name]:>13.1f}")

@@ -28,8 +28,11 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
+from numba.core import types as nb_types
 from scipy import stats
 
 from slipenv.contracts import PoseEstimate, SensorFrame, wrap_angle
@@ -49,17 +52,39 @@ _ROUTINE_SKIPS = frozenset({"bearing_gated"})  # counted in extras['skipped'], n
 
 SENSORS = ("gyro", "acc", "tilt", "odo", "bearing")  # keys of LindgrenEKF.history
 _NO_BEARINGS = np.zeros(0)
-_F64 = np.dtype(np.float64)  # compared with ==: an unpickled array's dtype is another object
+_F64 = np.dtype(np.float64)  # an unpickled array's dtype is an equal, other object
 _N_OUT_ROWS, _OUT_AT = kernel.N_OUT_ROWS, kernel.OUT_AT
 _S_T_STATE, _S_X, _S_COUNTS, _S_TORQUE = (kernel.S_T_STATE, kernel.S_X, kernel.S_COUNTS,
                                           kernel.S_TORQUE)
-_R_CODE, _R_POSE, _R_SLIP_ANGLE, _R_SOIL, _R_INV_SHAPE, _R_K_BETA = (
-    kernel.R_CODE, kernel.R_POSE, kernel.R_SLIP_ANGLE, kernel.R_SOIL, kernel.R_INV_SHAPE,
-    kernel.R_K_BETA)
+# LindgrenEKF._estimate unpacks the kernel's values in one go, in this order
+assert (kernel.R_CODE, kernel.R_POSE, kernel.R_SLIP_ANGLE, kernel.R_SOIL, kernel.R_INV_SHAPE,
+        kernel.R_K_BETA) == (0, 1, 6, 7, 11, 13)
+_construct = PoseEstimate.construct
 _OUT_SENSORS = (("gyro", kernel.OUT_GYRO, 1), ("acc", kernel.OUT_ACC, 2),
                 ("tilt", kernel.OUT_TILT, 2), ("odo", kernel.OUT_ODO, 2))
 _ODO_SKIPS = {kernel.INVALID_SOIL: "odo_invalid_soil", kernel.TORQUE_NAN: "torque_nan",
               kernel.SLIP_OUT_OF_RANGE: "slip_out_of_range"}
+
+
+_F64_STRIDES = (8,)  # a contiguous 1-D float64 array's
+# the frame kernel's argument types as LindgrenEKF.update passes them: five contiguous 1-D
+# float64 arrays (state, spare, context, bearing times and values), eleven floats, ``out``
+_FRAME_SIG = ((nb_types.float64[::1],) * 5 + (nb_types.float64,) * 11
+              + (nb_types.float64[:, ::1],))
+_ENTRY: list[Any] = [None, None]  # the frame kernel's dispatcher, and what update calls for it
+
+
+def _frame_entry(dispatcher: Any) -> Callable[..., Any]:
+    """What :meth:`LindgrenEKF.update` calls for the frame kernel ``dispatcher``: its compiled
+    code for :data:`_FRAME_SIG` itself (from numba's cache, or compiled), without the
+    dispatcher's typing of 17 arguments and search for their overload at every frame (~1 µs at
+    an env step); the dispatcher when it is not numba's (``NUMBA_DISABLE_JIT=1``, a stand-in).
+    The entry checks no argument's type: only arrays of the signature's may go to it (or
+    read-only ones: the kernel never writes the bearings)."""
+    compile_sig = getattr(dispatcher, "compile", None)
+    entry = dispatcher if compile_sig is None else compile_sig(_FRAME_SIG)
+    _ENTRY[:] = dispatcher, entry
+    return entry
 
 
 def _status(out: np.ndarray, m: int) -> list[int]:
@@ -173,6 +198,8 @@ class LindgrenEKF:
         self.uses_exteroceptive = self.scheme != Scheme.ODOMETRY_ONLY
         self.lateral_slip = self.params.lateral_slip_sigma0 > 0.0
         self._okello = self.scheme == Scheme.ALL_SLIP_OKELLO
+        # the keys of the estimate's extras: 0 soil only, 1 and k_β, 2 and Okello's B
+        self._extras_layout = 2 if self._okello else int(self.lateral_slip)
         if self.scheme == Scheme.ALL_SLIP_OKELLO:
             n_soil = lm.N_OKELLO
         else:
@@ -342,13 +369,18 @@ class LindgrenEKF:
         except (TypeError, AttributeError, IndexError):
             count_l, count_r, torque_l, torque_r = self._readings(frame)
         n_bad = 0
+        dispatcher = kernel.filter_frame
+        call = _ENTRY[1] if _ENTRY[0] is dispatcher else _frame_entry(dispatcher)
         if self.uses_exteroceptive:
             bearing_z, bearing_t = frame.beacon_bearings_rad, frame.beacon_times_s
-            # the usual frame's arrays go to the kernel as they are: it checks their order
+            # the usual frame's arrays go to the kernel as they are (it checks their order),
+            # and they are the entry's type: float64 (numpy's own descriptor: an `is` instead
+            # of a cold dtype comparison), 1-D, contiguous
             if not (type(bearing_z) is type(bearing_t) is np.ndarray
-                    and bearing_z.dtype == bearing_t.dtype == _F64
-                    and bearing_z.ndim == bearing_t.ndim == 1):
+                    and bearing_z.dtype is bearing_t.dtype is _F64
+                    and bearing_z.strides == bearing_t.strides == _F64_STRIDES):
                 bearing_t, bearing_z, n_bad = self._frame_bearings(frame)
+                call = dispatcher  # it types whatever arrays these are
         else:
             bearing_t = bearing_z = _NO_BEARINGS
         # Python floats: numba's dispatcher types them faster than numpy scalars
@@ -356,22 +388,16 @@ class LindgrenEKF:
                               float(frame.acc_y_mps2))
         pitch, roll = float(frame.pitch_rad), float(frame.roll_rad)
         state, new = self._state, self._spare
-        for attempt in range(2):
-            m = len(bearing_t)
-            out = np.empty((m + _N_OUT_ROWS, 3))  # the history and the estimate keep views
-            r = kernel.filter_frame(state, new, self._ctx, bearing_t, bearing_z, t_prev, t,
-                                    gyro, acc_x, acc_y, pitch, roll, count_l, count_r,
-                                    torque_l, torque_r, out)
-            n_accepted = r[_R_CODE]
-            if n_accepted >= 0.0:
-                break
-            if n_accepted == kernel.BAD_COUNTS:
-                self._side_counts(frame)  # raises with the counts
-                raise RuntimeError("LindgrenEKF: the kernel rejected the frame's counts")
-            if attempt:  # never: _frame_bearings returns what the kernel accepts
-                raise RuntimeError("LindgrenEKF: the kernel rejected the frame's bearings")
-            # bearings out of order or NaN, or late (then this raises)
-            bearing_t, bearing_z, n_bad = self._frame_bearings(frame)
+        m = len(bearing_t)
+        out = np.empty((m + _N_OUT_ROWS, 3))  # the history and the estimate keep views
+        r = call(state, new, self._ctx, bearing_t, bearing_z, t_prev, t, gyro, acc_x, acc_y,
+                  pitch, roll, count_l, count_r, torque_l, torque_r, out)
+        n_accepted = r[0]  # R_CODE
+        if n_accepted < 0.0:
+            bearing_t, bearing_z, n_bad, out, r = self._refilter(
+                frame, n_accepted, t_prev, t, gyro, acc_x, acc_y, pitch, roll, count_l, count_r,
+                torque_l, torque_r)
+            m, n_accepted = len(bearing_t), r[0]
         self._state, self._spare, self._t = new, state, t
         self._frames.append((t, bearing_t, out))
         if n_accepted == m + self._n_sensors and not n_bad:  # all accepted
@@ -379,6 +405,22 @@ class LindgrenEKF:
         else:
             self._count_skips(m, _status(out.ravel(), m), n_bad)
         return self._estimate(r, out[:3])
+
+    def _refilter(self, frame: SensorFrame, code: float, *args: float) -> tuple:
+        """The frame the kernel returned ``code`` for (< 0): raise with the counts, or run it
+        again with its bearings sorted and filtered (late ones raise); returns the bearings'
+        times and values, the number of non-finite ones, ``out`` and the kernel's values."""
+        if code == kernel.BAD_COUNTS:
+            self._side_counts(frame)  # raises with the counts
+            raise RuntimeError("LindgrenEKF: the kernel rejected the frame's counts")
+        # bearings out of order or NaN, or late (then this raises)
+        bearing_t, bearing_z, n_bad = self._frame_bearings(frame)
+        out = np.empty((len(bearing_t) + _N_OUT_ROWS, 3))
+        r = kernel.filter_frame(self._state, self._spare, self._ctx, bearing_t, bearing_z, *args,
+                                out)
+        if r[0] < 0.0:  # never: _frame_bearings returns what the kernel accepts
+            raise RuntimeError("LindgrenEKF: the kernel rejected the frame's bearings")
+        return bearing_t, bearing_z, n_bad, out, r
 
     def _readings(self, frame: SensorFrame) -> tuple[float, float, float, float]:
         """Side-mean counts (NaN for the schemes without odometry) and torques, (left, right),
@@ -451,27 +493,33 @@ class LindgrenEKF:
     def _estimate(self, r: tuple[float, ...], cov: np.ndarray) -> PoseEstimate:
         """:meth:`estimate` from the values ``r`` of :func:`.kernel.estimate_values` and the
         covariance of the pose ``cov`` (3, 3), an array nothing writes."""
-        if self.estimates_soil:
-            r_l, r_r, k_l, k_r = r[_R_SOIL], r[_R_SOIL + 1], r[_R_SOIL + 2], r[_R_SOIL + 3]
-        else:
-            r_l, r_r, k_l, k_r = self._fixed_soil
         # β̂ feeds a path follower's slip-angle feed-forward (Yamauchi Eq. 10); 0 without k_β.
-        slip_angle = r[_R_SLIP_ANGLE]
-        extras: dict[str, object] = {"R_wl_m": r_l, "R_wr_m": r_r, "k_sl": k_l, "k_sr": k_r}
-        if self._okello:
-            for side, b in (("okello_Bl", r[_R_INV_SHAPE]), ("okello_Br", r[_R_INV_SHAPE + 1])):
-                extras[side] = 1.0 / b if b != 0.0 else math.inf
-        if self.lateral_slip:
-            extras["k_beta_rad_per_g"] = r[_R_K_BETA]
-            extras["slip_angle_rad"] = slip_angle
+        _, x_m, y_m, yaw, speed, yaw_rate, slip_angle, r_l, r_r, k_l, k_r, b_l, b_r, k_beta = r
+        if not self.estimates_soil:
+            r_l, r_r, k_l, k_r = self._fixed_soil
         skipped = self.skipped
-        extras["n_bearings_used"] = self._n_bearings_used
-        extras["n_skipped"] = sum(skipped.values()) if skipped else 0
-        extras["skipped"] = dict(skipped)
-        # construct: the frozen dataclass's __init__ cost ~2 µs a step
-        p = _R_POSE  # x, y, θ, v, Ω
-        return PoseEstimate.construct(r[p], r[p + 1], r[p + 2], r[p + 3], r[p + 4], slip_angle,
-                                      cov, extras)
+        n_skipped = sum(skipped.values()) if skipped else 0
+        # one dict display per layout (this runs at every control step), keys in one order
+        if self._extras_layout == 1:  # the lateral slip gain (FarmField-v0's filter)
+            extras = {"R_wl_m": r_l, "R_wr_m": r_r, "k_sl": k_l, "k_sr": k_r,
+                      "k_beta_rad_per_g": k_beta, "slip_angle_rad": slip_angle,
+                      "n_bearings_used": self._n_bearings_used, "n_skipped": n_skipped,
+                      "skipped": skipped.copy()}
+        elif self._extras_layout == 0:
+            extras = {"R_wl_m": r_l, "R_wr_m": r_r, "k_sl": k_l, "k_sr": k_r,
+                      "n_bearings_used": self._n_bearings_used, "n_skipped": n_skipped,
+                      "skipped": skipped.copy()}
+        else:  # Okello's B per wheel, then the lateral slip gain if any
+            extras = {"R_wl_m": r_l, "R_wr_m": r_r, "k_sl": k_l, "k_sr": k_r,
+                      "okello_Bl": 1.0 / b_l if b_l != 0.0 else math.inf,
+                      "okello_Br": 1.0 / b_r if b_r != 0.0 else math.inf}
+            if self.lateral_slip:
+                extras["k_beta_rad_per_g"] = k_beta
+                extras["slip_angle_rad"] = slip_angle
+            extras["n_bearings_used"] = self._n_bearings_used
+            extras["n_skipped"] = n_skipped
+            extras["skipped"] = skipped.copy()
+        return _construct(x_m, y_m, yaw, speed, yaw_rate, slip_angle, cov, extras)
 
     # -- input validation ----------------------------------------------------------------------
     def _side_counts(self, frame: SensorFrame) -> tuple[float, float]:

@@ -543,6 +543,19 @@ def bearing_residual(z: float, h: float) -> float:
     return wrap(z - h)
 
 
+COSINE_MARGIN = 1e-9  # see nearest_beacon
+
+
+@njit(cache=True)
+def _direction_cosine(x: np.ndarray, beacon_x: float, beacon_y: float, ux: float,
+                      uy: float) -> float:
+    """Cosine of the angle between the unit vector (``ux``, ``uy``) and the direction from
+    the state's position to the beacon; NaN at the beacon itself."""
+    dx, dy = beacon_x - x[IX], beacon_y - x[IY]
+    r2 = dx * dx + dy * dy
+    return (dx * ux + dy * uy) / math.sqrt(r2) if r2 > 0.0 else math.nan
+
+
 @njit(cache=True)
 def nearest_beacon(x: np.ndarray, z: float, beacons_xy: np.ndarray) -> tuple[int, float]:
     """Associate a bearing with the beacon giving the smallest innovation (Lindgren §2.4).
@@ -562,9 +575,25 @@ def nearest_beacon(x: np.ndarray, z: float, beacons_xy: np.ndarray) -> tuple[int
     y : float
         Its innovation ``wrap(z - h_lz(x))`` [rad].
     """
+    # The innovation's size |y| is the angle between the measured direction and the beacon's,
+    # so the beacon with the largest cosine between the two has the smallest; cosines take a
+    # square root per beacon where y takes an arctangent and two remainders. The exact y is
+    # then computed, in the beacons' order, for every beacon whose cosine comes within
+    # COSINE_MARGIN of the largest (far wider than the cosines' rounding, so the beacons that
+    # tie for the smallest |y| are all among them) or is not finite: the same beacon and y,
+    # bit for bit, as comparing the exact y of every beacon.
+    heading = x[ITH] + z
+    ux, uy = math.cos(heading), math.sin(heading)
+    best_cos = -math.inf
+    for j in range(beacons_xy.shape[0]):
+        c = _direction_cosine(x, beacons_xy[j, 0], beacons_xy[j, 1], ux, uy)
+        if c > best_cos:
+            best_cos = c
     best, y_best = 0, math.inf
     for j in range(beacons_xy.shape[0]):
-        y = bearing_residual(z, bearing_to(x, beacons_xy[j, 0], beacons_xy[j, 1]))
-        if abs(y) < abs(y_best):
-            best, y_best = j, y
+        c = _direction_cosine(x, beacons_xy[j, 0], beacons_xy[j, 1], ux, uy)
+        if c >= best_cos - COSINE_MARGIN or not math.isfinite(c):
+            y = bearing_residual(z, bearing_to(x, beacons_xy[j, 0], beacons_xy[j, 1]))
+            if abs(y) < abs(y_best):
+                best, y_best = j, y
     return best, y_best

@@ -410,15 +410,24 @@ class Transfer:
             else other.scales
         return float(np.median(np.abs(self.scales - ref).max(axis=1)))
 
-    def versus(self, simpler: Transfer, min_fall: float) -> dict:
+    def versus(self, simpler: Transfer, min_fall: float, times_left: float,
+               min_drift: float) -> dict:
         """This model against a ``simpler`` one on the same held-out parts
-        (:func:`paired_fall`, :func:`richer_wins`), for the report."""
+        (:func:`paired_fall`, :func:`fall_floor`, :func:`richer_wins`), for the report.
+
+        The floor on the scale of what this model leaves counts only when this model is
+        material against the simpler one: it changes the turn or the distance of the
+        held-out parts by ``min_drift`` (:meth:`scale_change`)."""
         mean, se, lower = paired_fall(self.before, simpler.after, self.after)
+        material = self.scale_change(simpler) >= min_drift
+        floor = fall_floor(self.before, self.after, min_fall,
+                           times_left if material else float("inf"))
         return {"richer": list(self.effects), "simpler": list(simpler.effects),
                 "mean_fall": mean, "standard_error": se, "lower_on_parts": lower,
                 "parts": int(self.after.size),
                 "lower_in_sum": bool(self.after.sum() < simpler.after.sum()),
-                "richer_wins": richer_wins(self.before, simpler.after, self.after, min_fall)}
+                "material": material, "floor": floor,
+                "richer_wins": richer_wins(self.before, simpler.after, self.after, floor)}
 
     def jackknife_cov(self) -> np.ndarray:
         """Covariance of the fitted vector from the spread of the leave-one-part-out fits
@@ -485,23 +494,41 @@ def paired_fall(before: np.ndarray, simpler: np.ndarray, richer: np.ndarray
     return float(d.mean()), se, int(np.sum(d > 0))
 
 
+def fall_floor(before: np.ndarray, richer: np.ndarray, min_fall: float,
+               times_left: float) -> float:
+    """The paired fall (:func:`paired_fall`, on the nominal model's scale) a richer model
+    must reach to beat a simpler one: the smaller of ``min_fall`` and ``times_left`` times
+    the richer model's own mean held-out error [-].
+
+    The floor keeps two fits that both leave only the noise tied. A share of the nominal
+    error stands for the noise while the models leave a sizeable part of it; but where a
+    large error (a turn-scale error over a long log) makes the nominal error hundreds of
+    times what a fitting model leaves, a consistent fall far below ``min_fall`` of it can be
+    a real component the simpler model misses (a distance scale beside the turn). Judged
+    against what the richer model leaves, not against the turn error, it is many times
+    that. ``Transfer.versus`` passes ``times_left`` only for a richer model that is material
+    against the simpler one: re-splitting the same geometry lowers two halves' small
+    residuals by up to 30 times what it leaves on kinematic logs with nothing to find, and
+    only ``min_fall`` holds it."""
+    nominal = max(float(before.mean()), 1e-300)
+    return min(min_fall, times_left * float(richer.mean()) / nominal)
+
+
 def richer_wins(before: np.ndarray, simpler: np.ndarray, richer: np.ndarray,
-                min_fall: float) -> bool:
+                floor: float) -> bool:
     """Whether a richer model's held-out error beats a simpler (nested) one's by more than
     its uncertainty: lower on most parts, and the mean paired fall (:func:`paired_fall`, on
     the nominal model's scale; positive means lower in sum) above one standard error of it
-    and at least ``min_fall``. The parts are held out (other runs, or the other half of a run),
-    so extra parameters that only fit the training parts' noise do not pass however many
-    they are; the floor ``min_fall`` keeps two fits that both leave only the noise tied
-    (their residuals' ratio is then noise itself). How much the extra parameters change
-    the distance or the turn is not asked: a 0.3 % radius that every held-out run confirms
-    is kept.
+    and at least ``floor`` (:func:`fall_floor`). The parts are held out (other runs, or the
+    other half of a run), so extra parameters that only fit the training parts' noise do
+    not pass however many they are; the floor keeps two fits that both leave only the noise
+    tied (with two parts the standard error is half their gap, itself noise).
 
     ``before``, ``simpler``, ``richer``: (P,) held-out mean squared errors of the nominal,
     simpler and richer models on the same parts."""
     mean, se, lower = paired_fall(before, simpler, richer)
     return bool(richer.sum() < simpler.sum() and 2 * lower > richer.size
-                and mean > se and mean >= min_fall)
+                and mean > se and mean >= floor)
 
 
 def whole_parts(logs: list) -> tuple[Segments, str] | None:

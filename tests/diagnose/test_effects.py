@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -138,3 +139,25 @@ def test_combined_slip_at_zero_slip_angle_is_a_common_wheel_radius_so_it_is_held
 def test_an_effect_with_a_bad_flag_hook_or_redundant_entry_is_refused_when_built(bad):
     with pytest.raises(ValueError, match="calibration|redundant|local|condense"):
         dataclasses.replace(TOY, **bad)
+
+
+def test_turning_slip_scales_every_turn_as_a_wider_track_and_moves_only_forward_speed():
+    # Endo's split (Yamauchi Eq. 7-8): g_R' - g_L' = (1 - κ)(g_R - g_L) whatever the share
+    # f, the turn of a track W/(1 - κ) wide; the mean moves by κ (g_R - g_L)(2f - 1)/2,
+    # nothing on a pivot (f = 1/2). Hence the confound the report names on a skid-steer.
+    from slipenv.diagnose.effects.turning_slip import TurningSlip
+    from slipenv.estimators.skid_steer.endo import endo_left_share
+
+    rng = np.random.default_rng(4)
+    left, right = rng.uniform(-0.02, 0.05, (2, 1, 40))
+    seg = SimpleNamespace(dt=np.full((1, 40), 0.05))
+    kappa, n = 0.4, 0.9
+    new_left, new_right = TurningSlip(n, kappa).split(seg, left, right)
+    assert np.allclose(new_right - new_left, (1.0 - kappa) * (right - left), rtol=1e-12)
+    f = endo_left_share(left / 0.05, right / 0.05, n, 1e-3)
+    shift = 0.5 * kappa * (right - left) * (2.0 * f - 1.0)
+    assert np.allclose(0.5 * (new_left + new_right) - 0.5 * (left + right), shift, atol=1e-15)
+    pivot_l, pivot_r = TurningSlip(n, kappa).split(seg, -right, right)
+    assert np.allclose(pivot_l + pivot_r, 0.0, atol=1e-15)
+    conf = effect("turning_slip").confound("skid_steer")
+    assert conf is not None and conf.shows_as == "track_width"

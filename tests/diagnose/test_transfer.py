@@ -13,7 +13,14 @@ from slipenv.diagnose.cli import diagnose
 from slipenv.diagnose.fit import Problem
 from slipenv.diagnose.kinematic import KinematicTruth, kinematic_log
 from slipenv.diagnose.replay import build_segments
-from slipenv.diagnose.select import MIN_DRIFT, MIN_GAIN, TIE_GAIN, _richest_that_wins, _separates
+from slipenv.diagnose.select import (
+    MIN_DRIFT,
+    MIN_GAIN,
+    TIE_GAIN,
+    TIMES_LEFT,
+    _richest_that_wins,
+    _separates,
+)
 
 TRUE_WIDTH = 0.505  # nominal 0.5 m: 1 % wider
 
@@ -144,9 +151,10 @@ def test_a_radius_error_is_not_given_a_track_width_the_held_out_halves_do_not_ne
     assert abs(value - 0.1015) < 3 * se + 2e-4 * 0.1015  # the allowance of test_single_log
 
 
-def _nested(before, simpler, richer):
-    return horizon.richer_wins(np.asarray(before, float), np.asarray(simpler, float),
-                               np.asarray(richer, float), TIE_GAIN)
+def _nested(before, simpler, richer, material=False):
+    before, simpler, richer = (np.asarray(a, float) for a in (before, simpler, richer))
+    floor = horizon.fall_floor(before, richer, TIE_GAIN, TIMES_LEFT if material else np.inf)
+    return horizon.richer_wins(before, simpler, richer, floor)
 
 
 def test_a_richer_model_lower_on_every_held_out_part_beyond_the_spread_wins():
@@ -177,12 +185,56 @@ def test_a_richer_model_lower_on_most_parts_but_within_its_uncertainty_loses():
 
 
 def test_two_fits_that_both_leave_only_noise_tie_whatever_the_ratio_of_their_residuals():
-    # the richer model removes 80 % of what the simpler leaves, on both halves, but that is
-    # 0.08 % of the nominal error: below the tie floor, the simpler stays
+    # a richer model that changes neither the distance nor the turn (not material) removes
+    # 80 % of what the simpler leaves, on both halves, but that is 0.08 % of the nominal
+    # error: below the tie floor, the simpler stays
     before = np.ones(2)
     simpler = np.array([1e-3, 1e-3])
     assert not _nested(before, simpler, 0.2 * simpler)
     assert _nested(before, 100 * simpler, 20 * simpler)  # the same ratio at 8 % wins
+
+
+def test_a_material_fall_many_times_what_the_richer_model_leaves_wins_below_the_nominal_floor():
+    # a turn-scale error makes the nominal error large: the width alone leaves 0.05 % of
+    # it, the radii (a distance scale too) 0.002 %, on both halves. The fall is 0.05 % of
+    # the nominal error, below the 1 % floor, but 20 times what the radii leave
+    before = np.ones(2)
+    simpler = np.array([5.0e-4, 5.8e-4])
+    richer = np.array([1.5e-5, 3.1e-5])
+    floor = horizon.fall_floor(before, richer, TIE_GAIN, TIMES_LEFT)
+    assert floor == pytest.approx(TIMES_LEFT * 2.3e-5)
+    assert _nested(before, simpler, richer, material=True)
+    # the same numbers from a richer model that changes nothing material: noise, it ties
+    assert not _nested(before, simpler, richer, material=False)
+    # a fall of less than TIMES_LEFT times what the richer model leaves ties as well
+    assert not _nested(before, simpler, simpler / (TIMES_LEFT + 0.9), material=True)
+    assert _nested(before, simpler, simpler / (TIMES_LEFT + 1.1), material=True)
+    # where the richer model leaves much, the nominal floor is the smaller one and decides
+    assert horizon.fall_floor(before, np.array([0.4, 0.4]), TIE_GAIN, TIMES_LEFT) == TIE_GAIN
+
+
+def test_a_distance_scale_on_a_one_way_circle_names_the_radii_not_the_width():
+    # right wheel 1.5 % larger on a circle driven one way: the width alone takes the turn
+    # (the ratio and the width are not separable there) but not the 0.75 % longer distance,
+    # a fall of many times what the radii leave on both halves, far below 1 % of the
+    # nominal error (the turn error dominates it)
+    truth = KinematicTruth(0.1, 0.1015, 0.5)
+    log = kinematic_log(3, truth, duration_s=60.0, route="circle")
+    tested = _three_transfers([log])
+    width, radii, _ = tested
+    assert width.passes(MIN_GAIN, MIN_DRIFT)
+    best, versus = _richest_that_wins(tested)
+    assert best is radii, versus
+    assert versus[0]["material"] and versus[0]["mean_fall"] < TIE_GAIN
+    assert np.allclose(radii.xs, [truth.radius_left_m, truth.radius_right_m], rtol=2e-3)
+
+
+def test_on_a_width_only_one_way_circle_the_radii_do_not_replace_the_width():
+    # there the radius ratio and the mean radius reproduce the width's turn exactly: no
+    # distance left to explain, so the radii fit noise and the width stays
+    log = kinematic_log(3, KinematicTruth(0.1, 0.1, TRUE_WIDTH), duration_s=60.0, route="circle")
+    best, versus = _richest_that_wins(_three_transfers([log]))
+    assert best is not None and best.effects == ("track_width",), versus
 
 
 def test_the_fall_is_judged_on_the_nominal_models_mean_error_not_each_parts_own():
@@ -214,6 +266,17 @@ def test_on_a_width_only_log_the_radii_do_not_join_the_width():
     log = kinematic_log(16, KinematicTruth(0.1, 0.1, TRUE_WIDTH), duration_s=120.0)
     best, versus = _richest_that_wins(_three_transfers([log]))
     assert best is not None and best.effects == ("track_width",), versus
+
+
+def test_radii_that_change_no_distance_do_not_join_the_width_however_much_they_cut_its_residue():
+    # on this width-only log the width and radii (radii within 0.01 % of nominal) leave a
+    # sixth of what the width alone leaves on both halves: a re-split of the same geometry,
+    # not material, so only the nominal floor could admit it and it does not
+    log = kinematic_log(7, KinematicTruth(0.1, 0.1, TRUE_WIDTH), duration_s=120.0)
+    best, versus = _richest_that_wins(_three_transfers([log]))
+    assert best is not None and best.effects == ("track_width",), versus
+    (v,) = [v for v in versus if len(v["richer"]) == 2]
+    assert v["lower_on_parts"] == 2 and not v["material"] and v["floor"] == TIE_GAIN
 
 
 def test_radii_that_every_held_out_run_confirms_are_named_though_below_the_material_drift():

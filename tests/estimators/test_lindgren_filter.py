@@ -255,6 +255,79 @@ def test_what_the_filter_hands_out_never_changes_afterwards() -> None:
     np.testing.assert_array_equal(handed_out["x"], kept["x"])
 
 
+def test_estimates_share_no_mutable_object_with_the_filter_or_each_other() -> None:
+    """Each estimate owns its extras and skip counts, and its covariance shares no memory with
+    another's: a user who edits one estimate changes neither the filter nor any other one."""
+    run = synthetic(40)
+    ekf = LindgrenEKF(GEOM, 4, params=LindgrenNoise(lateral_slip_sigma0=3.0), beacons_xy=CROSS)
+    ests = [ekf.reset(*truth0()[:3], run.frames[0])]
+    for f in run.frames[1:]:
+        ests.append(ekf.update(f))
+    ests.append(ekf.estimate())
+    assert ekf.skipped  # the drive skips something, so the skip counts are worth copying
+    skipped = dict(ekf.skipped)
+    for a, b in zip(ests, ests[1:], strict=False):
+        assert a.extras is not b.extras and a.extras["skipped"] is not b.extras["skipped"]
+        assert not np.shares_memory(a.cov, b.cov)
+    for est in ests:
+        assert est.extras["skipped"] is not ekf.skipped
+        assert est.extras["n_skipped"] == sum(est.extras["skipped"].values())
+    last = ests[-1]
+    kept = [dict(e.extras, skipped=dict(e.extras["skipped"])) for e in ests[:-1]]
+    last.extras["skipped"]["bearing_gated"] = 10**6
+    last.extras["n_bearings_used"] = -1
+    assert ekf.skipped == skipped
+    assert [dict(e.extras, skipped=dict(e.extras["skipped"])) for e in ests[:-1]] == kept
+    assert ekf.estimate().extras["n_bearings_used"] == len(ekf.history["bearing"])
+
+
+def test_bearing_arrays_of_any_layout_give_the_state_of_contiguous_ones() -> None:
+    """The filter hands the usual frame's bearing arrays to the kernel's compiled code for
+    contiguous float64 arrays as they are; strided views, big-endian or read-only arrays,
+    arrays whose dtype is an equal copy of float64's (as unpickled ones have) and frames with
+    more bearings than usual must give bitwise the state that contiguous copies give."""
+    run = synthetic(60)
+    rng = np.random.default_rng(5)
+
+    def strided(a: np.ndarray) -> np.ndarray:
+        return np.repeat(a, 2)[::2]  # the same values, every other element of a buffer
+
+    def big_endian(a: np.ndarray) -> np.ndarray:
+        return a.astype(">f8")
+
+    def read_only(a: np.ndarray) -> np.ndarray:
+        a = a.copy()
+        a.flags.writeable = False
+        return a
+
+    def copied_dtype(a: np.ndarray) -> np.ndarray:
+        return np.frombuffer(a.tobytes(), dtype=np.dtype("<f8").newbyteorder("="))
+
+    def crowded(f: SensorFrame) -> SensorFrame:  # six bearings in the frame's interval
+        t = np.sort(f.t_s - 0.05 * rng.uniform(0.0, 1.0, 6))
+        return dataclasses.replace(f, beacon_times_s=t,
+                                   beacon_bearings_rad=rng.uniform(-1.0, 1.0, 6))
+
+    base = [run.frames[0]] + [crowded(f) if k % 7 == 3 else f
+                              for k, f in enumerate(run.frames[1:])]
+    assert any(len(f.beacon_times_s) > 4 for f in base)
+    ref = LindgrenEKF(GEOM, 4, beacons_xy=CROSS)
+    ref.reset(*truth0()[:3], base[0])
+    for f in base[1:]:
+        ref.update(f)
+    for layout in (strided, big_endian, read_only, copied_dtype):
+        ekf = LindgrenEKF(GEOM, 4, beacons_xy=CROSS)
+        ekf.reset(*truth0()[:3], base[0])
+        for f in base[1:]:
+            ekf.update(dataclasses.replace(f, beacon_times_s=layout(f.beacon_times_s),
+                                           beacon_bearings_rad=layout(f.beacon_bearings_rad)))
+        np.testing.assert_array_equal(ekf.x, ref.x, err_msg=layout.__name__)
+        np.testing.assert_array_equal(ekf.P, ref.P, err_msg=layout.__name__)
+        assert ekf.skipped == ref.skipped
+        assert [t for t, _, _ in ekf.history["bearing"]] == [
+            t for t, _, _ in ref.history["bearing"]]
+
+
 def test_nan_optional_sensors_are_counted_and_logged(caplog: pytest.LogCaptureFixture) -> None:
     run = synthetic(2)
     ekf = LindgrenEKF(GEOM, 4, beacons_xy=default_beacons_xy())

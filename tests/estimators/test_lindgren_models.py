@@ -308,6 +308,38 @@ def test_nearest_beacon_picks_smallest_innovation() -> None:
         assert y == pytest.approx(0.01)
 
 
+def test_nearest_beacon_equals_comparing_every_innovation_bit_for_bit() -> None:
+    """The association screens beacons by direction cosine before computing innovations: it
+    must pick the beacon (lowest index among ties) and return the innovation that comparing
+    the exact innovation of every beacon gives, also for beacons in one direction, a
+    duplicated beacon, a bearing exactly on a beacon, the vehicle on a beacon and a NaN
+    heading."""
+    rng = np.random.default_rng(7)
+    for trial in range(3000):
+        m = int(rng.integers(0, 7))
+        beacons = rng.uniform(-20.0, 20.0, (m, 2))
+        if m >= 2 and trial % 4 == 0:  # a beacon behind another, or a duplicate
+            beacons[1] = beacons[0] * rng.choice([0.5, 1.0, 2.0])
+        x = np.zeros(lm.N_BASE)
+        x[[lm.IX, lm.IY]] = rng.uniform(-20.0, 20.0, 2)
+        x[lm.ITH] = rng.uniform(-math.pi, math.pi)
+        if m and trial % 9 == 0:
+            x[[lm.IX, lm.IY]] = beacons[-1]
+        z = rng.uniform(-math.pi, math.pi)
+        if m and trial % 5 == 0:
+            z = float(lo.bearing_hx(x, beacons[:1])[0])
+        if trial % 31 == 0:
+            x[lm.ITH] = math.nan
+        best, y_best = 0, math.inf  # the exact innovation of every beacon, in order
+        for j in range(m):
+            y = lo.bearing_residual(z, lo.bearing_to(x, beacons[j, 0], beacons[j, 1]))
+            if abs(y) < abs(y_best):
+                best, y_best = j, y
+        k, y = lo.nearest_beacon(x, z, beacons)
+        assert k == best
+        assert np.float64(y).tobytes() == np.float64(y_best).tobytes()
+
+
 def test_oracle_soil_validation() -> None:
     soil = OracleSoil([0.283, 0.287], [2500, 2200])
     assert soil.wheel_radius_m == (0.283, 0.287)
