@@ -198,8 +198,6 @@ class LindgrenEKF:
         self.uses_exteroceptive = self.scheme != Scheme.ODOMETRY_ONLY
         self.lateral_slip = self.params.lateral_slip_sigma0 > 0.0
         self._okello = self.scheme == Scheme.ALL_SLIP_OKELLO
-        # the keys of the estimate's extras: 0 soil only, 1 and k_β, 2 and Okello's B
-        self._extras_layout = 2 if self._okello else int(self.lateral_slip)
         if self.scheme == Scheme.ALL_SLIP_OKELLO:
             n_soil = lm.N_OKELLO
         else:
@@ -497,28 +495,17 @@ class LindgrenEKF:
         _, x_m, y_m, yaw, speed, yaw_rate, slip_angle, r_l, r_r, k_l, k_r, b_l, b_r, k_beta = r
         if not self.estimates_soil:
             r_l, r_r, k_l, k_r = self._fixed_soil
+        extras: dict[str, object] = {"R_wl_m": r_l, "R_wr_m": r_r, "k_sl": k_l, "k_sr": k_r}
+        if self._okello:
+            extras["okello_Bl"] = 1.0 / b_l if b_l != 0.0 else math.inf
+            extras["okello_Br"] = 1.0 / b_r if b_r != 0.0 else math.inf
+        if self.lateral_slip:
+            extras["k_beta_rad_per_g"] = k_beta
+            extras["slip_angle_rad"] = slip_angle
         skipped = self.skipped
-        n_skipped = sum(skipped.values()) if skipped else 0
-        # one dict display per layout (this runs at every control step), keys in one order
-        if self._extras_layout == 1:  # the lateral slip gain (FarmField-v0's filter)
-            extras = {"R_wl_m": r_l, "R_wr_m": r_r, "k_sl": k_l, "k_sr": k_r,
-                      "k_beta_rad_per_g": k_beta, "slip_angle_rad": slip_angle,
-                      "n_bearings_used": self._n_bearings_used, "n_skipped": n_skipped,
-                      "skipped": skipped.copy()}
-        elif self._extras_layout == 0:
-            extras = {"R_wl_m": r_l, "R_wr_m": r_r, "k_sl": k_l, "k_sr": k_r,
-                      "n_bearings_used": self._n_bearings_used, "n_skipped": n_skipped,
-                      "skipped": skipped.copy()}
-        else:  # Okello's B per wheel, then the lateral slip gain if any
-            extras = {"R_wl_m": r_l, "R_wr_m": r_r, "k_sl": k_l, "k_sr": k_r,
-                      "okello_Bl": 1.0 / b_l if b_l != 0.0 else math.inf,
-                      "okello_Br": 1.0 / b_r if b_r != 0.0 else math.inf}
-            if self.lateral_slip:
-                extras["k_beta_rad_per_g"] = k_beta
-                extras["slip_angle_rad"] = slip_angle
-            extras["n_bearings_used"] = self._n_bearings_used
-            extras["n_skipped"] = n_skipped
-            extras["skipped"] = skipped.copy()
+        extras["n_bearings_used"] = self._n_bearings_used
+        extras["n_skipped"] = sum(skipped.values()) if skipped else 0
+        extras["skipped"] = skipped.copy()
         return _construct(x_m, y_m, yaw, speed, yaw_rate, slip_angle, cov, extras)
 
     # -- input validation ----------------------------------------------------------------------

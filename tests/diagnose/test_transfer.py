@@ -178,7 +178,6 @@ def test_a_richer_model_lower_on_most_parts_but_within_its_uncertainty_loses():
     # lower, but the mean fall (0.044) is below its standard error (about 0.15)
     d = np.array([0.02, 0.02, 0.02, -0.4, 0.56])
     simpler = np.ones(5)
-    assert (simpler - d).sum() < simpler.sum()
     mean, se, lower = horizon.paired_fall(np.ones(5), simpler, simpler - d)
     assert lower == 4 and 0 < mean < se
     assert not _nested(np.ones(5), simpler, simpler - d)
@@ -246,9 +245,8 @@ def test_the_fall_is_judged_on_the_nominal_models_mean_error_not_each_parts_own(
     mean, se, lower = horizon.paired_fall(before, simpler, richer)
     assert mean == pytest.approx(0.5 * (0.0007 + 0.0006) / 0.15) and lower == 2
     assert se == pytest.approx(0.5 * (0.0007 - 0.0006) / 0.15)
+    # (on each half's own scale the mean fall would be 3.6 %, above the floor)
     assert not _nested(before, simpler, richer)
-    # on each half's own scale the mean fall would be 3.6 %, above the floor
-    assert np.mean((simpler - richer) / before) > TIE_GAIN
 
 
 def test_on_a_radius_only_log_the_width_does_not_join_the_radii():

@@ -313,18 +313,21 @@ def _oracle_lateral_note(dropout: dict, final: dict) -> str:
             "oracle explains part of the odometric residual by a crab)")
 
 
+def _where(nis: float | None, band: Sequence[float]) -> str:
+    """Where a NIS lies against its 95 % band: "below", "above" or "inside"."""
+    return ("below" if nis is not None and nis < band[0] else
+            "above" if nis is not None and nis > band[1] else "inside")
+
+
 def _nis_cause(headline: dict, ablation: dict, same_scheme: bool) -> str:
     """What the two blocks, which differ only by the world's force law, say of the slip
     model's NIS (Lindgren Eq. 43) in the headline world (when both report the same
     slip-model scheme)."""
     h, a, band = headline["slip_model"], ablation["slip_model"], ablation["band"]
     if h is None or a is None or not same_scheme:
-        return ("The two worlds' slip models are not the same scheme in this run, so their "
-                "NIS do not separate the force law's part.")
-    def where_h(v: float, b: Sequence[float]) -> str:
-        return "below" if v < b[0] else "above" if v > b[1] else "inside"
-
-    where = where_h(a, band)
+        return ("The two worlds' slip models are not the same scheme with a NIS each in this "
+                "run, so their NIS do not separate the force law's part.")
+    where, where_h = _where(a, band), _where(h, headline["band"])
     if h <= a:
         return (f"In the ablation's linear world, which differs only by the force law, the "
                 f"same filter's NIS is {a:.2f}, {where} its band {band[0]:.3f}-{band[1]:.3f}: "
@@ -333,7 +336,7 @@ def _nis_cause(headline: dict, ablation: dict, same_scheme: bool) -> str:
             f"paths, seeds, sensors and filter, the torque noise included), the same filter's "
             f"NIS is {a:.2f}, {where} its band {band[0]:.3f}-{band[1]:.3f}; the curved law "
             f"raises it by {h - a:.2f}: the filter's linear torque-slip law (one k_s per side) "
-            f"in a world whose law is curved is what puts it {where_h(h, band)} the band, and "
+            f"in a world whose law is curved is what puts it {where_h} the band, and "
             f"no state or noise term of the filter carries that error.")
 
 
@@ -526,8 +529,7 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
         k_s_true=_fmt(soil_true["k_s"], 0), k_s0=cfg["k_s_prior"],
         R_true=_fmt(soil_true["R_w_m"], 3),
         R_nom=cfg["nominal_wheel_radius_m"], nis4=nis4 if nis4 is not None else float("nan"),
-        nis_where=("below" if nis4 is not None and nis4 < band[0] else
-                   "above" if nis4 is not None and nis4 > band[1] else "inside"),
+        nis_where=_where(nis4, band),
         band_lo=band[0], band_hi=band[1],
         nis_cause=_nis_cause(h["nis"], a["nis"], slip == a["slip_model_scheme"]),
         rho3=h["autocorr_mean"]["scheme3"], rho3_var=h["autocorr_var"]["scheme3"],
