@@ -12,7 +12,9 @@
    of that one run applied to the *other* sessions' circle and square runs (whole-run dead
    reckoning from the first logged pose): the cut of their mean final position error, beside
    the oracle (the width alone, and the width and radii, fitted on the whole dead-reckoned
-   path of the same run).
+   path of the same run). A model carries as a robot's config takes it (the report's
+   calibration block): absolute radii and separation, the fitting logs' nominal for what the
+   diagnosis (or the oracle) did not fit, whatever nominal the other sessions' headers state.
 6. OptiOdom, whole sessions (``--sessions``): the model diagnosed on one session folder (all
    its runs together) applied to the *other* sessions' circle and square runs the same way,
    per session (the target is a cut of at least 50 %), beside the oracle fitted on the whole
@@ -41,8 +43,10 @@ from pathlib import Path
 import numpy as np
 
 from slipenv.diagnose import proprio
+from slipenv.diagnose.carry import carried_model
 from slipenv.diagnose.cli import diagnose, load_logs
-from slipenv.diagnose.extension import parse_model
+from slipenv.diagnose.effects.rolling_radius import RollingRadius
+from slipenv.diagnose.effects.track_width import TrackWidth
 from slipenv.diagnose.fit import Problem, fit
 from slipenv.diagnose.replay import build_segments, simulate
 from slipenv.diagnose.segments import cut_spans, log_arrays, wheel_sides
@@ -50,18 +54,6 @@ from slipenv.logs.real import convert_real_datasets
 
 DRIFT_DEG = 3.0  # [deg] a run "visibly drifts" beyond this nominal heading error at its end
 HALF_DRIFT_DEG = 1.5  # [deg] ... and each half by at least this much, the same way
-
-
-def whole_run(log, model: dict) -> tuple[float, float]:
-    """(heading error [deg], position error [m]) at the end of the run, dead-reckoned whole
-    from its first logged pose with ``model`` (``{}``: nominal)."""
-    arr = log_arrays(log)
-    ok = np.flatnonzero(arr["gt_ok"])
-    seg = cut_spans([arr], [log], [(0, int(ok[0]), int(ok[-1]) + 1)])
-    pred = simulate(seg, model)
-    last = np.flatnonzero(seg.gt_ok[0])[-1]
-    dyaw = (pred[0, last, 2] - seg.gt[0, last, 2] + np.pi) % (2 * np.pi) - np.pi
-    return float(np.degrees(dyaw)), float(np.hypot(*(pred[0, last, :2] - seg.gt[0, last, :2])))
 
 
 SCREENED = ("circular", "square")  # path types whose runs are screened and are the targets
@@ -105,7 +97,12 @@ def oracle(runs, effects: tuple[str, ...] = ("track_width",)) -> dict:
              for li, a in enumerate(arrays)]
     parts = cut_spans(arrays, runs, spans)
     short = Problem.from_segments(build_segments(runs))
-    return fit(Problem(parts, short.heading_scale_m, short.travel_m), effects).params
+    params = dict(fit(Problem(parts, short.heading_scale_m, short.travel_m), effects).params)
+    # like the diagnosis's calibration: what the fit leaves is the fitting runs' nominal
+    r, w = float(np.median(parts.radius)), float(np.median(parts.track))
+    params.setdefault("rolling_radius", RollingRadius(r, r))
+    params.setdefault("track_width", TrackWidth(w))
+    return params
 
 
 def half_drifts(log) -> tuple[float, float, float]:
@@ -139,10 +136,6 @@ def _causes(rep: dict) -> list[str]:
     return [c for c in [rep["cause"], *rep["also"]] if c != "none"]
 
 
-def _model(rep: dict) -> dict:
-    return parse_model(rep).effects if _causes(rep) else {}
-
-
 def _pct(x: float) -> str:
     return f"{100 * x:.0f} %"
 
@@ -163,7 +156,7 @@ def single_runs(logs, targets: Targets | None = None) -> None:
             continue
         rep, _ = diagnose([log], i["file"])
         causes = _causes(rep)
-        before, after, rel = targets.cut(_model(rep), i["session"])
+        before, after, rel = targets.cut(carried_model(rep), i["session"])
         o_w = targets.cut(oracle([log]), i["session"])[2]
         o_wr = targets.cut(oracle([log], ("track_width", "rolling_radius")), i["session"])[2]
         rows.append((i["path_type"], causes, rel, o_w, o_wr))
@@ -234,7 +227,7 @@ def session_models(logs, targets: Targets | None = None) -> None:
         except ValueError as exc:
             print(f"| {name} | {path} | {len(runs)} | | not diagnosed: {exc} | | | | | | |")
             continue
-        before, after, rel = targets.cut(_model(rep), name)
+        before, after, rel = targets.cut(carried_model(rep), name)
         o_w = targets.cut(oracle(runs), name)[2]
         o_wr = targets.cut(oracle(runs, ("track_width", "rolling_radius")), name)[2]
         rows.append((name, path, rel, o_w, o_wr))
@@ -354,7 +347,7 @@ def pivots(logs) -> None:
           "first half | second half | difference |\n|---|---|---|---|---|")
     for log in squares:
         i = log.meta.data["optiodom"]
-        drift = whole_run(log, {})[0]
+        drift = half_drifts(log)[0]
         if abs(drift) <= DRIFT_DEG:
             continue
         a, b = pivot_turn_scales(log)

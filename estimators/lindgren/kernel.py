@@ -629,7 +629,20 @@ def _finish(x: np.ndarray, P: np.ndarray, state: np.ndarray, status: np.ndarray,
 # a call into the runtime (hundreds of call sites, with the exit paths), and each array argument a
 # heap-allocated record at every call; without it the frame took 11-18 % less time, measured on
 # FarmField-v0's frames (bitwise the same results).
-@njit(cache=True, _nrt=False)  # type: ignore[call-overload]  # _nrt: not in numba's stubs
+def nrt_free_options(options: type | None = None) -> dict:
+    """``{"_nrt": False}`` where numba's CPU target knows that option (numba's own, private:
+    a release may drop it), else ``{}``: without it the kernel compiles with the runtime, the
+    same results some 15 % slower, instead of failing at its first call. ``options``: the
+    target-options class to ask (numba's ``CPUTargetOptions`` by default)."""
+    if options is None:
+        try:
+            from numba.core.cpu import CPUTargetOptions as options
+        except ImportError:
+            return {}
+    return {"_nrt": False} if hasattr(options, "_nrt") else {}
+
+
+@njit(cache=True, **nrt_free_options())
 def filter_frame(
     state: np.ndarray, new: np.ndarray, ctx: np.ndarray, bearing_t: np.ndarray,
     bearing_z: np.ndarray, t_prev: float, t: float, gyro_z: float, acc_x: float, acc_y: float,

@@ -21,6 +21,9 @@ from typing import Any
 
 import numpy as np
 
+from slipenv.diagnose.effects.base import Term
+from slipenv.diagnose.effects.rolling_radius import RollingRadius
+from slipenv.diagnose.effects.track_width import TrackWidth
 from slipenv.diagnose.fit import Fit, Problem, fit
 from slipenv.diagnose.numbers import determined, estimate, num
 
@@ -136,6 +139,21 @@ def calibration(problem: Problem, chosen: Fit | None) -> dict[str, Any] | None:
     }
 
 
+def replay_terms(cal: dict[str, Any]) -> dict[str, Term]:
+    """The calibration block as replay terms (``replay.simulate``): the robot's geometry as a
+    config holds it, in absolute values.
+
+    A robot whose config takes the calibration dead-reckons every later log with these radii
+    and this separation, whatever nominal a log's header states. The radius or width the
+    diagnosis did not change is the fitting logs' nominal, which their held-out test kept; a
+    log recorded with another nominal (a session logged with another wheel diameter) is
+    replayed with the calibrated value, not its own.
+    """
+    return {"rolling_radius": RollingRadius(float(cal["left_wheel_radius_m"][0]),
+                                            float(cal["right_wheel_radius_m"][0])),
+            "track_width": TrackWidth(float(cal["wheel_separation_m"][0]))}
+
+
 def markdown(cal: dict[str, Any]) -> list[str]:
     """Lines of the human report's calibration section."""
     ddc = cal["diff_drive_controller"]
@@ -162,4 +180,7 @@ def markdown(cal: dict[str, Any]) -> list[str]:
         f"| turn scale c_θ | {estimate(turn[0], turn[1], spec='.5f')} |",
         f"| distance scale c_d | {estimate(dist[0], dist[1], spec='.5f')} |", "",
         f"What this log separates: {cal['note']}.", "",
+        "To see what these values do to logs they were not fitted on (another session of "
+        "this robot): `slipenv diagnose OTHER_LOG_DIR --model REPORT.json`, with this "
+        "diagnosis's `--json` report.", "",
     ]

@@ -1,5 +1,5 @@
 """``slipenv diagnose (LOG_DIR | --example [NAME]) [--json PATH] [--report DIR] [--seed N]
-[--jobs N] [--quiet]``.
+[--jobs N] [--quiet] [--model REPORT]``.
 
 ``LOG_DIR`` is one slipenv-log/1 folder, or a folder of them (diagnosed together: one vehicle,
 several runs; the held-out comparison then predicts each run with models fitted on other
@@ -12,6 +12,10 @@ Outputs are checked before any work (``slipenv.cli_outputs``). The reports are w
 staging folder beside their target and moved into place only when complete, so a Ctrl-C never
 leaves a report that looks finished: the staging folder is removed (after a hard kill its
 ``.partial`` name says what it is).
+
+``--model REPORT`` scores the model of an earlier diagnosis (its ``--json`` report) on the
+logs instead of diagnosing them (``carry.py``): each log dead-reckoned whole, nominal and with
+the model carried as the robot's config takes it; ``--json`` then writes that score.
 """
 
 from __future__ import annotations
@@ -157,6 +161,10 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                    help="processes the fits run on (None: every core this process may use); "
                         "the diagnosis is the same whatever the number")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument("--model", default=None, metavar="REPORT",
+                   help="instead of a diagnosis, score the model of an earlier one (its --json "
+                        "report) on these logs: each dead-reckoned whole, nominal and with the "
+                        "model (its calibration as absolute geometry); --json writes the score")
     return p
 
 
@@ -194,6 +202,9 @@ def main(args) -> int:
     json_path = None if args.json is None else Path(args.json)
     report_dir = None if args.report is None else Path(args.report)
     quiet = bool(getattr(args, "quiet", False))
+    model_path = getattr(args, "model", None)
+    if model_path is not None:
+        return _score_model(model_path, folder, json_path, report_dir)
     if not _has_truth(folder):
         from slipenv.diagnose import proprio
 
@@ -230,6 +241,26 @@ def main(args) -> int:
         if report_tmp is not None:
             rep.write_human_report(report_tmp, report, sel, problem, sim, logs=logs)
     print(summary(report, time.perf_counter() - start))
+    return 0
+
+
+def _score_model(model_path: str, folder: Path, json_path: Path | None,
+                 report_dir: Path | None) -> int:
+    """``--model``: the model of ``model_path`` scored on the logs of ``folder``."""
+    from slipenv.diagnose import carry
+    from slipenv.diagnose import report as rep
+
+    if report_dir is not None:
+        raise ValueError("--report writes a diagnosis; with --model nothing is diagnosed: "
+                         "use --json PATH for the score")
+    report = carry.read_report(model_path)
+    logs = load_logs(folder)
+    result = carry.score(report, logs)
+    with _staged(json_path, None) as (json_tmp, _):
+        if json_tmp is not None:
+            rep.write_json({"model_from": str(model_path), "logs_from": str(folder), **result},
+                           json_tmp)
+    print(carry.summary(result))
     return 0
 
 

@@ -83,10 +83,29 @@ def test_turning_slip_stays_a_skid_steer_effect():
 REGIONS = (SoilRegion(-4.0, -4.0, -0.5, 0.0, 0.008), SoilRegion(1.0, 0.5, 4.0, 4.0, 0.006))
 
 
+def _field_log():
+    return kinematic_log(3, None, duration_s=180.0, route="field", soil_regions=REGIONS)
+
+
 @pytest.fixture(scope="module")
 def field_problem():
-    log = kinematic_log(3, None, duration_s=180.0, route="field", soil_regions=REGIONS)
-    return Problem.from_segments(build_segments([log]))
+    return Problem.from_segments(build_segments([_field_log()]))
+
+
+@pytest.fixture(scope="module")
+def field_map(field_problem):
+    """The soil map fitted on every segment of the field log."""
+    return _quiet(fit, field_problem, ("soil_map",))
+
+
+@pytest.fixture(scope="module")
+def field_diagnosis():
+    """The field log's diagnosis: (log, report, selection, problem). The selection holds the
+    held-out errors of the nominal model and of every effect, each refitted with one fold left
+    out (``cross_validate`` on ``make_folds``), so a test of them need not refit them."""
+    log = _field_log()
+    report, (sel, problem) = _quiet(diagnose, [log], "<field>")
+    return log, report, sel, problem
 
 
 def _truth_compliance(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -96,12 +115,14 @@ def _truth_compliance(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return c
 
 
-def test_soil_regions_are_mapped_and_the_map_cuts_the_held_out_error(field_problem):
-    problem = field_problem
-    folds = make_folds(problem.seg)
-    base = _quiet(cross_validate, problem, (), folds)
-    single = _quiet(cross_validate, problem, ("torque_slip",), folds)
-    mapped = _quiet(cross_validate, problem, ("soil_map",), folds)
+def test_soil_regions_are_mapped_and_the_map_cuts_the_held_out_error(field_diagnosis,
+                                                                      field_map):
+    _, _, sel, problem = field_diagnosis
+    np.testing.assert_array_equal(sel.folds, make_folds(problem.seg))
+    base = sel.baseline["pose"]
+    single, mapped = (next(c for c in sel.candidates if c.effects == (name,))
+                      for name in ("torque_slip", "soil_map"))
+    assert base.effects == () and len(base.errors) == len(problem.seg)
     ratio = mapped.errors.sum() / base.errors.sum()
     assert ratio < 0.2, ratio  # the map predicts segments it never saw (0.08 measured)
     assert mapped.errors.sum() < 0.3 * single.errors.sum()  # one stiffness everywhere cannot
@@ -110,8 +131,7 @@ def test_soil_regions_are_mapped_and_the_map_cuts_the_held_out_error(field_probl
     used = [2 + 6 * len(f.params["soil_map"].layout().rects) + f.params["soil_map"].regions
             for f in mapped.fold_fits]
     assert mapped.n_params == max(used) < 35 and single.n_params == 2
-    f = _quiet(fit, problem, ("soil_map",))
-    m = f.params["soil_map"]
+    m = field_map.params["soil_map"]
     assert m.regions >= 2
     # where the route went, the map's stiffness matches the truth's soft/firm split
     pos = problem.seg.pos[np.abs(problem.seg.dphi).sum(axis=-1) > 0]
@@ -125,11 +145,10 @@ def test_soil_regions_are_mapped_and_the_map_cuts_the_held_out_error(field_probl
 
 
 def test_a_field_log_is_named_soil_map_and_its_report_shows_where_the_ground_is_soft(
-        tmp_path):
+        field_diagnosis, tmp_path):
     from slipenv.diagnose.report import write_human_report
 
-    log = kinematic_log(3, None, duration_s=180.0, route="field", soil_regions=REGIONS)
-    report, (sel, problem) = _quiet(diagnose, [log], "<field>")
+    log, report, sel, problem = field_diagnosis
     assert report["cause"] == "soil_map", report["candidates"]
     folder = write_human_report(tmp_path / "rep", report, sel, problem, logs=[log])
     assert (folder / "soil.png").stat().st_size > 10_000
@@ -249,8 +268,8 @@ def test_a_fitted_map_is_searched_with_no_shape_narrower_than_the_vehicles_track
         assert min(u1 - u0, v1 - v0) >= track - 1e-9
 
 
-def test_the_fitted_map_is_applied_to_the_simulation_as_patches(field_problem):
-    f = _quiet(fit, field_problem, ("soil_map",))
+def test_the_fitted_map_is_applied_to_the_simulation_as_patches(field_problem, field_map):
+    f = field_map
     report = {"format": "slipenv-diagnosis/1", "cause": "soil_map", "also": [],
               "parameters": f.report(field_problem.seg)}
     config = synth.base_config("diff_drive")

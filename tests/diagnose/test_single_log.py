@@ -208,23 +208,18 @@ def test_a_joint_fit_starts_each_fold_from_the_cause_and_the_added_effect_fitted
         _merged([cause, alone[:1]])
 
 
-def test_a_local_effect_added_to_a_named_cause_is_judged_on_the_short_segments_only(monkeypatch):
-    from slipenv.diagnose import select as selection
+def test_a_local_effect_added_to_a_named_cause_is_judged_on_the_short_segments_only(
+        traced_radius_diagnosis):
     from slipenv.diagnose.effects import EFFECTS, effect
 
     assert {n for n in EFFECTS if effect(n).local} == {"soil_patch", "soil_map"}
-    judged_long: list[tuple[str, ...]] = []
-    judge_long = selection._judge_long
-
-    def recording(problem, hz, cand, reference, **kw):
-        judged_long.append(cand.effects)
-        judge_long(problem, hz, cand, reference, **kw)
-
-    monkeypatch.setattr(selection, "_judge_long", recording)
-    # right wheel 1.5 % larger, with a torque column: soil effects are testable
-    log = kinematic_log(31, KinematicTruth(0.1, 0.1015, 0.5), duration_s=60.0, with_torque=True)
-    report, _ = _diagnose(log)
+    # right wheel 1.5 % larger, with a torque column: soil effects are testable (on this
+    # half-minute log both soil effects are joined to the cause, on the short route)
+    report = traced_radius_diagnosis.report
+    judged_long = traced_radius_diagnosis.judged_long
     assert report["cause"] == "rolling_radius", report["candidates"]
+    added = traced_radius_diagnosis.joined
+    assert any({"soil_patch", "soil_map"} <= set(rest) for rest in added), added
     joints = [e for e in judged_long if len(e) > 1]
     assert joints, "forward selection tried no joint model on the long route"
     # alone, every effect is judged on both routes; joined to the cause, soil never on the long

@@ -20,9 +20,9 @@ from slipenv.diagnose.report import confounded
 from slipenv.diagnose.select import Candidate, Selection
 
 
-def test_torque_slip_hidden_on_a_rover_holds_material_slip_in_the_log(diagnosed):
-    case = diagnosed("torque_slip", "rover4ws", 8)
-    log, world = case.synth.log, case.synth.world
+def test_torque_slip_hidden_on_a_rover_holds_material_slip_in_the_log(synthesized):
+    case = synthesized("torque_slip", "rover4ws", 8)
+    log, world = case.log, case.world
     assert 6.0 <= world["slope_deg"] <= 12.0
     moving = np.abs(np.diff(log.signals[f"enc_{log.wheels[0]}"])) > 0
     for wheel in log.wheels:

@@ -31,19 +31,18 @@ def _diagnose(log, jobs: int) -> dict:
 
 
 def test_a_diagnosis_on_two_worker_processes_is_the_one_of_one_process_bit_for_bit(
-        monkeypatch):
+        traced_radius_diagnosis, monkeypatch):
     # right wheel 1.5 % larger, with a torque column: every effect is tried, soil maps
-    # included, and forward selection fits joint models
-    log = kinematic_log(31, KinematicTruth(0.1, 0.1015, 0.5), duration_s=30.0, with_torque=True)
+    # included, and forward selection fits joint models (the one-process diagnosis is shared)
+    one = traced_radius_diagnosis.report
     steps = []
     step = selection._step
-    monkeypatch.setattr(selection, "_step", lambda *a: steps.append(a[5]) or step(*a))
-    one = _diagnose(log, 1)
-    two = _diagnose(log, 2)
+    monkeypatch.setattr(selection, "_step", lambda *a: steps.append(list(a[5])) or step(*a))
+    two = _diagnose(traced_radius_diagnosis.log, 2)
     assert one["cause"] == "rolling_radius"
     tried = {c["cause"] for c in one["candidates"] if c.get("untestable") is None}
     assert {"soil_map", "soil_patch", "torque_slip"} <= tried
-    assert steps and steps[0] == steps[len(steps) // 2] and "soil_map" in steps[0]
+    assert steps and steps == traced_radius_diagnosis.joined and "soil_map" in steps[0]
     assert json.dumps(one, default=repr) == json.dumps(two, default=repr)
     assert not multiprocessing.active_children()  # the workers ended with the diagnosis
 

@@ -175,3 +175,19 @@ def test_drive_takes_every_branch(frames: list) -> None:
     assert {"bearing_nan", "gyro_nan", "tilt_nan", "torque_nan"} <= set(skipped)
     assert len(ekf.history["bearing"]) >= 5
     assert len(ekf.history["odo"]) < N_FRAMES
+
+
+def test_the_kernel_compiles_without_numbas_runtime_only_where_numba_knows_the_option() -> None:
+    """The runtime-free option is numba's private one: a numba without it gets the kernel
+    compiled with the runtime (no option) instead of an error at its first call."""
+
+    class WithoutOption:
+        pass
+
+    class WithOption:
+        _nrt = None
+
+    assert kernel.nrt_free_options(WithoutOption) == {}
+    assert kernel.nrt_free_options(WithOption) == {"_nrt": False}
+    # the installed numba knows it, and the kernel was compiled with it
+    assert kernel.filter_frame.targetoptions.get("_nrt") is False

@@ -4,7 +4,8 @@ user would, in one :func:`slipenv.rollout.rollout` with the public
 :class:`slipenv.rollout.TrajectoryRecorder`.
 
 Two *limit* set-ups measure what bounds the result: :class:`LimitObservation` replaces the
-env's observation by one built from the true-β odometry or from the truth.
+env's observation by one built from the true-β odometry or from the truth; :func:`best_gain`
+picks a law's oracle gain, the best of a grid of triple poles judged on the laps' true error.
 """
 
 from __future__ import annotations
@@ -104,8 +105,8 @@ def circle_episode(cfg: Settings, pole_rps: float, feedforward: bool, estimator:
     ``steer_on`` (:data:`~.settings.STEER_ON`) selects what the law sees: the env's
     observation from ``estimator``, or a limit (Endo's n from ``estimator_kwargs["n"]``).
     Returns the true cross-track statistics [m] over the whole lap, whether the lap was
-    completed inside the env's corridor (0.1 m on Yamauchi's circle), how it ended and the
-    true and steered-on xy tracks.
+    completed inside the env's corridor (0.1 m on Yamauchi's circle, ``corridor_m``), how it
+    ended and the true and steered-on xy tracks.
 
     The episode runs in a corridor of :data:`WHOLE_LAP_M` so that the error statistics cover
     the whole lap (the paper's 9.1 and 1.3 cm are lap averages); a lap counts as completed
@@ -136,6 +137,7 @@ def circle_episode(cfg: Settings, pole_rps: float, feedforward: bool, estimator:
     return {"mean_error_m": float(ct.mean()), "rmse_m": float(np.sqrt(np.mean(ct**2))),
             "max_error_m": float(ct.max()),
             "completed": bool(result.success and ct.max() <= corridor_m),
+            "corridor_m": float(corridor_m),
             # how far the true slip angle swings around the lap (5-95 % range) [deg]
             "slip_angle_swing_deg": float(np.subtract(*np.percentile(beta_deg, [95, 5]))),
             "end": result.end_reason, "true_xy": traj.true_pose[:, :2],
@@ -150,3 +152,27 @@ def mean_episodes(eps: list[dict]) -> dict:
     out["per_seed_mean_error_m"] = [e["mean_error_m"] for e in eps]
     out["completed"] = int(sum(e["completed"] for e in eps))
     return out
+
+
+def best_gain(laps_by_pole: dict[float, list[dict]]) -> dict:
+    """The oracle controller of a law: the triple pole [rad/s] whose worst lap has the smallest
+    true maximum cross-track error [m], the quantity that decides whether every lap stays in
+    the corridor (ties: the first pole of the grid).
+
+    ``laps_by_pole`` maps each pole to its laps (:func:`circle_episode` results). Returns the
+    chosen pole, its laps averaged (:func:`mean_episodes`) with their worst maximum error, the
+    env's corridor they were judged in, and per pole (keyed ``f"{pole:g}"``) the mean error,
+    worst maximum error and laps completed.
+    Chosen on the laps it reports: a bound on what any gain of the grid can do, not a tuning.
+    """
+    if not laps_by_pole or not all(laps_by_pole.values()):
+        raise ValueError("best_gain needs at least one lap at each of at least one pole")
+    worst = {p: max(e["max_error_m"] for e in eps) for p, eps in laps_by_pole.items()}
+    pole = min(worst, key=lambda p: worst[p])
+    by_pole = {f"{p:g}": {"mean_error_m": float(np.mean([e["mean_error_m"] for e in eps])),
+                          "worst_max_error_m": worst[p],
+                          "completed": int(sum(e["completed"] for e in eps))}
+               for p, eps in laps_by_pole.items()}
+    return {"pole_rps": pole, **mean_episodes(laps_by_pole[pole]),
+            "worst_max_error_m": worst[pole], "laps_run": len(laps_by_pole[pole]),
+            "corridor_m": laps_by_pole[pole][0]["corridor_m"], "by_pole": by_pole}

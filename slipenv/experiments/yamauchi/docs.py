@@ -50,7 +50,7 @@ SETUP = """\
    path-following law of Eq. 9 and with the β feed-forward of Eq. 10, both on the
    slip-compensated observation, gains tuned once on flat rigid ground (triple pole chosen
    among {poles} rad/s: {pole:g}); plus the paper's conventional set-up (Eq. 9 on
-   gyrodometry); {seeds} seeds each.
+   gyrodometry); {seeds} seeds each.{oracle_step}
 
 **Departure from the paper: one slip-angle regression per turning direction.** Eq. 9's
 regressors carry the turning direction only in the sign of the angular displacement, but on a
@@ -104,7 +104,7 @@ LIMITS_MEASURED = LIMITS_HEAD + """
 - **Circle.** On the odometry with the true β the feed-forward changes the mean error by a
   factor {true_beta_ff:.2f} against feedback, and steered on the truth with the gains tuned on
   rigid ground by {truth_ff:.2f} (the target asks ≤ 0.5); the true slip angle of the turning
-  vehicle swings by {swing:.0f}° (5-95 % range) around a lap.
+  vehicle swings by {swing:.0f}° (5-95 % range) around a lap.{oracle_sentence}{search_sentence}
 """ + EXTRAPOLATION + """
 """
 """The limits of a run: only what its numbers say."""
@@ -214,6 +214,71 @@ def split_sentence(lim: dict) -> str:
             f"{pair('slip_compensated_true_slips_true_beta')}, the gyro's heading error.")
 
 
+def _law_result(g: dict) -> str:
+    """One law's oracle gain in words: its pole, worst-lap maximum error and laps."""
+    return (f"at {g['pole_rps']:g} rad/s, max {100 * g['worst_max_error_m']:.1f} cm, "
+            f"{g['completed']}/{g['laps_run']} lap{'s' if g['laps_run'] > 1 else ''}")
+
+
+def _worst_at(g: dict, pole: float) -> str:
+    """A law's worst-lap maximum error [cm] at ``pole`` of the oracle grid."""
+    return f"{100 * g['by_pole'][f'{pole:g}']['worst_max_error_m']:.1f}"
+
+
+def oracle_sentence(oracle: dict | None) -> str:
+    """What the oracle gain (each law's best triple pole of the oracle grid, on the laps' own
+    true maximum error) says of the circle: can the vehicle hold it on the truth, can any gain
+    hold it on the env's observations; empty for a run without it."""
+    if not oracle or not {"truth", "observation"} <= set(oracle):
+        return ""
+    truth, obs = oracle["truth"], oracle["observation"]
+    fb, ff = truth["feedback"], truth["feedforward"]
+    ob_fb, ob_ff = obs["feedback_gyrodometry"], obs["feedforward_slip_compensated"]
+    corridor = f"the {fb['corridor_m']:g} m corridor"
+    poles = ", ".join(f"{p:g}" for p in oracle["poles_rps"])
+    holds = {name: g["completed"] == g["laps_run"] for name, g in (("Eq. 9", fb), ("Eq. 10", ff))}
+    obs_any = max(v["completed"] for g in (ob_fb, ob_ff) for v in g["by_pole"].values())
+    if all(holds.values()):
+        truth_words = ("both laws complete their laps", "so the vehicle can hold the circle")
+    elif any(holds.values()):
+        law = next(k for k, v in holds.items() if v)
+        truth_words = (f"only {law} completes its laps",
+                       f"so the vehicle can hold the circle with {law}")
+    else:
+        truth_words = ("neither law completes every lap",
+                       f"so no gain of the grid keeps every lap inside {corridor} even on the "
+                       "truth")
+    obs_words = ("no gain of the grid completes a lap" if obs_any == 0 else
+                 f"the best gain of the grid completes at most {obs_any} of its laps")
+    out = (f" With the best gain of an oracle grid (triple poles {poles} rad/s, chosen per law "
+           "on the laps' own true maximum error, `metrics.limits.path_following.oracle_gain`; "
+           f"never used for the headline gains), steered on the truth, {truth_words[0]} "
+           f"(Eq. 9 {_law_result(fb)}; Eq. 10 {_law_result(ff)}), {truth_words[1]}. On the "
+           "env's observations (Eq. 9 on gyrodometry, Eq. 10 on slip-compensated odometry, "
+           f"{ob_fb['laps_run']} seeds) {obs_words} (best: Eq. 9 {_law_result(ob_fb)}; "
+           f"Eq. 10 {_law_result(ob_ff)}; with the truth's best poles the laps stray up to "
+           f"{_worst_at(ob_fb, fb['pole_rps'])} / {_worst_at(ob_ff, ff['pole_rps'])} cm)")
+    if all(holds.values()) and obs_any == 0:
+        return out + (", so the odometry's error, not the vehicle or the gains, keeps the laps "
+                      f"from {corridor}.")
+    return out + "."
+
+
+def search_sentence(pf: dict) -> str:
+    """The rigid-ground gain search that chooses the headline pole (§3.1), with its spread
+    over the poles; empty for a run without it."""
+    search = pf.get("rigid_ground_rmse_m_by_pole")
+    if not search:
+        return ""
+    lo, hi = 100 * min(search.values()), 100 * max(search.values())
+    slowest = pf["pole_rps"] == min(float(p) for p in search)
+    return (" The headline gains stay those chosen on a solid floor, as the paper set them "
+            "(§3.1): there Eq. 9 on gyrodometry (on concrete) puts every pole of "
+            + ", ".join(search) + f" rad/s within {hi - lo:.1f} cm of lap RMSE ({lo:.1f}-"
+            f"{hi:.1f} cm){': the search is flat' if hi - lo < 0.5 * lo else ''}, and it "
+            f"chose {pf['pole_rps']:g} rad/s{', the slowest' if slowest else ''}.")
+
+
 def page_body(result: dict, figures: Sequence[str], command: str) -> str:
     """The page's Markdown, every number from ``result``."""
     m, cfg = result["metrics"], result["settings"]
@@ -243,6 +308,11 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
     )
     values["n_split_paragraph"] = n_split_paragraph(m)
     values["split_sentence"] = split_sentence(lim)
+    values["oracle_sentence"] = oracle_sentence(lim["path_following"].get("oracle_gain"))
+    values["oracle_step"] = "" if not values["oracle_sentence"] else (
+        " As a limit, each law's best triple pole of a wider grid (an oracle, chosen on the "
+        "slope's own laps) is run steering on the truth and on the observation.")
+    values["search_sentence"] = search_sentence(pf)
     r2 = lim.get("endo_r2")
     values["n_dir_sentence"] = "" if not r2 else (
         " Eq. 8 with the n of every rotation run explains R² = "

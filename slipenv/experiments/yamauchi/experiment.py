@@ -17,7 +17,7 @@ from slipenv.vehicles.presets import tracked_patako
 from ..progress import iterate
 from ..results import publish
 from . import model_file
-from .circle import circle_episode, mean_episodes
+from .circle import best_gain, circle_episode, mean_episodes
 from .docs import world_options, write_results_page
 from .odometry import odometry_errors
 from .paper import ENDO_N, PAPER
@@ -144,18 +144,29 @@ def endo_r2(samples: dict, n: float, min_slip: float = 1e-2,
 
 
 def follow_circle(cfg: Settings, sc_kwargs: dict, seed: int, progress: bool) -> tuple:
-    """§3.1: gains tuned on flat rigid ground, then the three set-ups on the slope and the
-    two limits. Returns (path_following metrics, episodes by set-up, limit metrics)."""
+    """§3.1: gains tuned on flat rigid ground, then the three set-ups on the slope, the two
+    limits and each law's oracle gain. Returns (path_following metrics, episodes by set-up,
+    limit metrics)."""
     # Gains tuned once on flat rigid ground (§3.1: "determined on a solid floor in advance").
     tuning = {p: circle_episode(cfg, p, False, "gyrodometry", {}, seed, 0.0, "concrete")
               for p in iterate(cfg.poles_rps, progress, "gain search (concrete)")}
     pole = min(tuning, key=lambda p: tuning[p]["rmse_m"])
     circle_seeds = [seed + i for i in range(cfg.circle_seeds)]
+    laps: dict[tuple, dict] = {}
+
+    def lap(p: float, ff: bool, est: str, kw: dict, s: int, steer_on: str = "observation"):
+        """One lap on the slope; the oracle's grid repeats laps already run at the headline
+        pole, which are deterministic in their arguments, so each is run once."""
+        key = (p, ff, est, s, steer_on)
+        if key not in laps:
+            laps[key] = circle_episode(cfg, p, ff, est, kw, s, cfg.circle_tilt_deg,
+                                       steer_on=steer_on)
+        return laps[key]
+
     setups = {"feedback": (False, "slip_compensated", sc_kwargs),
               "feedforward": (True, "slip_compensated", sc_kwargs),
               "feedback_gyrodometry": (False, "gyrodometry", {})}
-    episodes = {k: [circle_episode(cfg, pole, ff, est, kw, s, cfg.circle_tilt_deg)
-                    for s in circle_seeds]
+    episodes = {k: [lap(pole, ff, est, kw, s) for s in circle_seeds]
                 for k, (ff, est, kw) in iterate(list(setups.items()), progress, "circles")}
     following = {k: mean_episodes(v) for k, v in episodes.items()}
     # What limits the lap: the same two laws with a perfect slip-angle regression (Endo's
@@ -166,9 +177,23 @@ def follow_circle(cfg: Settings, sc_kwargs: dict, seed: int, progress: bool) -> 
                   for s in (circle_seeds if mode == "true_beta" else circle_seeds[:1])]
     limit_laps: dict[tuple[str, str], list[dict]] = {}
     for mode, law, s in iterate(limit_plan, progress, "circle limits"):
-        limit_laps.setdefault((mode, law), []).append(circle_episode(
-            cfg, pole, law == "feedforward", "slip_compensated", sc_kwargs, s,
-            cfg.circle_tilt_deg, steer_on=mode))
+        limit_laps.setdefault((mode, law), []).append(lap(
+            pole, law == "feedforward", "slip_compensated", sc_kwargs, s, mode))
+    # The oracle controller: each law's best triple pole of a wider grid, chosen on the lap's
+    # own true error, steering on the truth and on the env's observation (the two set-ups of
+    # the laps target). Never used to choose the headline gains.
+    oracle_setups = {("truth", "feedback"): (False, "slip_compensated", sc_kwargs, "truth"),
+                     ("truth", "feedforward"): (True, "slip_compensated", sc_kwargs, "truth"),
+                     ("observation", "feedback_gyrodometry"): (False, "gyrodometry", {},
+                                                               "observation"),
+                     ("observation", "feedforward_slip_compensated"):
+                         (True, "slip_compensated", sc_kwargs, "observation")}
+    oracle_plan = [(k, p, s) for k, (*_, on) in oracle_setups.items() for p in cfg.oracle_poles_rps
+                   for s in (circle_seeds[:1] if on == "truth" else circle_seeds)]
+    oracle_laps: dict[tuple[str, str], dict[float, list[dict]]] = {}
+    for k, p, s in iterate(oracle_plan, progress, "circle oracle gains"):
+        ff, est, kw, on = oracle_setups[k]
+        oracle_laps.setdefault(k, {}).setdefault(p, []).append(lap(p, ff, est, kw, s, on))
     for ref in ("feedback", "feedback_gyrodometry"):
         key = "rmse_improvement" + ("" if ref == "feedback" else "_vs_gyrodometry_feedback")
         following[key] = 1.0 - following["feedforward"]["rmse_m"] / following[ref]["rmse_m"]
@@ -177,12 +202,16 @@ def follow_circle(cfg: Settings, sc_kwargs: dict, seed: int, progress: bool) -> 
     following["gains"] = {"k_eta": pole**3 / cfg.speed_mps, "k_phi": 3.0 * pole**2,
                           "k_omega": 3.0 * pole}
     following["rigid_ground_rmse_m_by_pole"] = {f"{p:g}": tuning[p]["rmse_m"] for p in tuning}
-    limits = {mode: {law: mean_episodes(limit_laps[mode, law])
-                     for law in ("feedback", "feedforward")}
-              for mode in ("true_beta", "truth")}
+    limits: dict[str, Any] = {mode: {law: mean_episodes(limit_laps[mode, law])
+                                     for law in ("feedback", "feedforward")}
+                              for mode in ("true_beta", "truth")}
     for pair in limits.values():
         pair["feedforward_to_feedback_mean"] = (pair["feedforward"]["mean_error_m"]
                                                 / pair["feedback"]["mean_error_m"])
+    oracle: dict[str, Any] = {"poles_rps": list(cfg.oracle_poles_rps)}
+    for (on, law), by_pole in oracle_laps.items():
+        oracle.setdefault(on, {})[law] = best_gain(by_pole)
+    limits["oracle_gain"] = oracle
     return following, episodes, limits
 
 

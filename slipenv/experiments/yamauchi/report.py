@@ -59,6 +59,12 @@ def table_rows(result: dict) -> list[tuple[str, str, str]]:
                  f"{100 * pf['rmse_improvement_vs_gyrodometry_feedback']:.0f} %"))
     rows.append(("circle RMSE improvement, Eq. 10 vs Eq. 9 (same odometry)", "-",
                  f"{100 * pf['rmse_improvement']:.0f} %"))
+    search = pf.get("rigid_ground_rmse_m_by_pole")
+    if search:  # why the headline pole: the gain search on a solid floor (§3.1)
+        rows.append(("circle gains: rigid-ground search (Eq. 9 on gyrodometry, concrete), lap "
+                     f"RMSE at {'/'.join(search)} rad/s [cm]", "-",
+                     " / ".join(f"{100 * v:.2f}" for v in search.values())
+                     + f" ({pf['pole_rps']:g} chosen)"))
     lim = m["limits"]
     by_dir = m.get("endo_n_by_direction") or {}
     for t in m["endo_n"]:
@@ -108,7 +114,34 @@ def table_rows(result: dict) -> list[tuple[str, str, str]]:
                      f"{100 * pair['feedback']['mean_error_m']:.1f} -> "
                      f"{100 * pair['feedforward']['mean_error_m']:.1f} "
                      f"(ratio {pair['feedforward_to_feedback_mean']:.2f};{rest})"))
+    rows += oracle_rows(lim["path_following"].get("oracle_gain"))
     rows += [(f"target: {k}", "", "met" if v else "NOT met") for k, v in m["targets_met"].items()]
+    return rows
+
+
+ORACLE_LAWS = (("truth", "feedback", "Eq. 9 steering on the truth"),
+               ("truth", "feedforward", "Eq. 10 steering on the truth"),
+               ("observation", "feedback_gyrodometry", "Eq. 9 on gyrodometry"),
+               ("observation", "feedforward_slip_compensated", "Eq. 10 on slip-compensated"))
+"""The oracle gain's set-ups: (what the law steers on, the law's key, its label)."""
+
+
+def oracle_rows(oracle: dict | None) -> list[tuple[str, str, str]]:
+    """The ``limit:`` rows of each law's oracle gain (the best triple pole of the oracle grid
+    on the laps' own true maximum error); none for a run without it."""
+    if not oracle:
+        return []
+    poles = oracle["poles_rps"]
+    rows = []
+    for on, law, label in ORACLE_LAWS:
+        g = oracle.get(on, {}).get(law)
+        if g is None:
+            continue
+        rows.append((f"limit: circle 15°, oracle gain (best triple pole of {min(poles):g}-"
+                     f"{max(poles):g} rad/s on the laps' max error), {label}", "-",
+                     f"pole {g['pole_rps']:g} rad/s: mean {100 * g['mean_error_m']:.1f}, "
+                     f"worst-lap max {100 * g['worst_max_error_m']:.1f} cm, "
+                     f"{g['completed']}/{g['laps_run']} laps"))
     return rows
 
 

@@ -55,6 +55,11 @@ class Settings:
     circle_radius_m: float = 0.25  # §3.1
     circle_seeds: int = 3  # §3.1: "three times for each control law", one lap each
     poles_rps: tuple[float, ...] = (0.15, 0.25, 0.4, 0.6, 1.0)  # rigid-ground gain search
+    oracle_poles_rps: tuple[float, ...] = (0.15, 0.25, 0.4, 0.6, 1.0, 1.5, 2.0, 3.0)
+    """An oracle grid, not a calibration: the triple poles [rad/s] among which each law's best
+    gain is chosen on the slope's own laps, by their true maximum error (a limit: what any gain
+    of the law can do, on the truth and on the env's observation). The headline gains come
+    from ``poles_rps`` on rigid ground (§3.1); nothing of this grid reaches them."""
     # The world: None keeps the env preset's (the Wong-Chiang track model on toyoura_sand,
     # also the world of the command's plans FULL and QUICK); e.g. "tracked_patako" runs the
     # per-wheel track law, "dry_sand" Wong's cohesive LLL sand.
@@ -74,13 +79,15 @@ class Settings:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
         if not 0.0 < self.test_fraction < 1.0:
             raise ValueError(f"test_fraction must be in (0, 1), got {self.test_fraction}")
-        if not self.poles_rps or min(self.poles_rps) <= 0.0:
-            raise ValueError(f"poles_rps must be positive, got {self.poles_rps}")
+        for name in ("poles_rps", "oracle_poles_rps"):
+            poles = getattr(self, name)
+            if not poles or min(poles) <= 0.0:
+                raise ValueError(f"{name} must be positive, got {poles}")
 
 
 FULL = Settings(vehicle=REPRODUCTION_VEHICLE, soil=REPRODUCTION_SOIL)
 """What ``slipenv reproduce yamauchi`` runs: the Wong-Chiang track model on ``toyoura_sand``."""
-QUICK = Settings(repeats=2, poles_rps=(0.15, 0.3, 0.6),
+QUICK = Settings(repeats=2, poles_rps=(0.15, 0.3, 0.6), oracle_poles_rps=(0.15, 2.0),
                  vehicle=REPRODUCTION_VEHICLE, soil=REPRODUCTION_SOIL)
 """``--quick``: fewer repetitions, the same experiments, the same world."""
 
