@@ -254,6 +254,9 @@ def _score_model(model_path: str, folder: Path, json_path: Path | None,
         raise ValueError("--report writes a diagnosis; with --model nothing is diagnosed: "
                          "use --json PATH for the score")
     report = carry.read_report(model_path)
+    if not _has_truth(folder):
+        raise ValueError(f"{folder}: these logs have no ground-truth pose; --model scores a "
+                         "model against the ground truth")
     logs = load_logs(folder)
     result = carry.score(report, logs)
     with _staged(json_path, None) as (json_tmp, _):

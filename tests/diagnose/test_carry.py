@@ -87,3 +87,5 @@ def test_the_command_writes_the_score_and_refuses_a_file_that_is_no_report(repor
     assert main(["diagnose", str(tmp_path / "later"), "--model", str(model),
                  "--report", str(tmp_path / "rep"), "--quiet"]) == 2
     assert "--report writes a diagnosis" in capsys.readouterr().err
+    assert main(["diagnose", "--example", "borealtc", "--model", str(model), "--quiet"]) == 2
+    assert "no ground-truth pose" in capsys.readouterr().err
