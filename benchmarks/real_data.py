@@ -43,11 +43,11 @@ from pathlib import Path
 import numpy as np
 
 from slipenv.diagnose import proprio
+from slipenv.diagnose.calibration import geometry_terms
 from slipenv.diagnose.carry import carried_model
 from slipenv.diagnose.cli import diagnose, load_logs
-from slipenv.diagnose.effects.rolling_radius import RollingRadius
-from slipenv.diagnose.effects.track_width import TrackWidth
 from slipenv.diagnose.fit import Problem, fit
+from slipenv.diagnose.horizon import whole_runs
 from slipenv.diagnose.replay import build_segments, simulate
 from slipenv.diagnose.segments import cut_spans, log_arrays, wheel_sides
 from slipenv.logs.real import convert_real_datasets
@@ -65,12 +65,9 @@ class Targets:
 
     def __init__(self, logs) -> None:
         runs = [log for log in logs if log.meta.data["optiodom"]["path_type"] in SCREENED]
-        arrays = [log_arrays(log) for log in runs]
-        spans = []
-        for li, arr in enumerate(arrays):
-            ok = np.flatnonzero(arr["gt_ok"])
-            spans.append((li, int(ok[0]), int(ok[-1]) + 1))
-        self.seg = cut_spans(arrays, runs, spans)
+        seg = whole_runs(runs)
+        assert seg is not None and len(seg) == len(runs)  # every OptiOdom run has its truth
+        self.seg = seg
         self.session = np.array([log.meta.data["optiodom"]["session"] for log in runs])
         self.last = np.array([np.flatnonzero(row)[-1] for row in self.seg.gt_ok])
         self.nominal = self.end_errors({})
@@ -92,17 +89,11 @@ class Targets:
 def oracle(runs, effects: tuple[str, ...] = ("track_width",)) -> dict:
     """``effects`` fitted on the whole dead-reckoned paths of ``runs`` (each run replayed whole
     from its first logged pose): the best such a fit does on the same data."""
-    arrays = [log_arrays(log) for log in runs]
-    spans = [(li, int(np.flatnonzero(a["gt_ok"])[0]), int(np.flatnonzero(a["gt_ok"])[-1]) + 1)
-             for li, a in enumerate(arrays)]
-    parts = cut_spans(arrays, runs, spans)
+    parts = whole_runs(runs)
     short = Problem.from_segments(build_segments(runs))
-    params = dict(fit(Problem(parts, short.heading_scale_m, short.travel_m), effects).params)
-    # like the diagnosis's calibration: what the fit leaves is the fitting runs' nominal
-    r, w = float(np.median(parts.radius)), float(np.median(parts.track))
-    params.setdefault("rolling_radius", RollingRadius(r, r))
-    params.setdefault("track_width", TrackWidth(w))
-    return params
+    # carried as the diagnosis's calibration: what the fit leaves is the fitting runs' nominal
+    return geometry_terms(fit(Problem(parts, short.heading_scale_m, short.travel_m), effects),
+                          parts)
 
 
 def half_drifts(log) -> tuple[float, float, float]:
@@ -194,9 +185,8 @@ def arc_fraction(logs) -> float:
     forward: turn radius above half the track), not on the spot."""
     arc = total = 0.0
     for log in logs:
-        arr = log_arrays(log)
-        ok = np.flatnonzero(arr["gt_ok"])
-        seg = cut_spans([arr], [log], [(0, int(ok[0]), int(ok[-1]) + 1)])
+        seg = whole_runs([log])
+        assert seg is not None
         d = seg.radius[:, None, :] * seg.dphi
         left = d[..., seg.sides == 0].mean(axis=-1)[0]
         right = d[..., seg.sides == 1].mean(axis=-1)[0]

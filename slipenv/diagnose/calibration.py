@@ -139,6 +139,11 @@ def calibration(problem: Problem, chosen: Fit | None) -> dict[str, Any] | None:
     }
 
 
+def _terms(r_left: float, r_right: float, width: float) -> dict[str, Term]:
+    return {"rolling_radius": RollingRadius(float(r_left), float(r_right)),
+            "track_width": TrackWidth(float(width))}
+
+
 def replay_terms(cal: dict[str, Any]) -> dict[str, Term]:
     """The calibration block as replay terms (``replay.simulate``): the robot's geometry as a
     config holds it, in absolute values.
@@ -149,9 +154,14 @@ def replay_terms(cal: dict[str, Any]) -> dict[str, Term]:
     log recorded with another nominal (a session logged with another wheel diameter) is
     replayed with the calibrated value, not its own.
     """
-    return {"rolling_radius": RollingRadius(float(cal["left_wheel_radius_m"][0]),
-                                            float(cal["right_wheel_radius_m"][0])),
-            "track_width": TrackWidth(float(cal["wheel_separation_m"][0]))}
+    return _terms(cal["left_wheel_radius_m"][0], cal["right_wheel_radius_m"][0],
+                  cal["wheel_separation_m"][0])
+
+
+def geometry_terms(f: Fit, seg) -> dict[str, Term]:
+    """The geometry of fit ``f`` on ``seg`` as :func:`replay_terms` gives a calibration's:
+    absolute radii and width, ``seg``'s nominal for what ``f`` does not fit."""
+    return _terms(*_geometry(f, seg)[0])
 
 
 def markdown(cal: dict[str, Any]) -> list[str]:

@@ -69,8 +69,10 @@ def carried_model(report: dict) -> dict[str, Term]:
 
 def check_logs(report: dict, logs: list) -> None:
     """ValueError unless ``logs`` come from the kind of vehicle, with the wheels, the report
-    was fitted on (a model of one vehicle says nothing about another)."""
-    kind, wheels = report.get("vehicle_kind"), set(report.get("wheels") or ())
+    was fitted on (a model of one vehicle says nothing about another; the report's wheels
+    as :func:`~slipenv.diagnose.extension.parse_model` reads them)."""
+    ext = parse_model(report)
+    kind, wheels = ext.vehicle_kind, set(ext.wheels)
     for log in logs:
         name = str(log.path) if log.path else "<memory>"
         if kind is not None and log.meta.kind != kind:
