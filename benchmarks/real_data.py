@@ -224,7 +224,9 @@ def session_models(logs, targets: Targets | None = None) -> None:
         params = ", ".join(f"{k} = {v[0]:.4f} ± {v[1]:.4f}" for k, v in rep["parameters"].items())
         tr = rep.get("transfer") or {}
         inside = "; ".join(f"{'+'.join(t['effects'])} {t['error_ratio']:.2f}"
-                           + (" (worse on a part)" if t["makes_a_part_worse"] else "")
+                           + (" (materially worse on a part)" if t["makes_parts_materially_worse"]
+                              else " (worse on a part, not materially)"
+                              if t["makes_a_part_worse"] else "")
                            for t in tr.get("tested", []))
         # the parsimony test: the richer model's fall of the held-out error (mean ± standard
         # error over the held-out parts, on the nominal error's scale), parts it lowers

@@ -52,6 +52,8 @@ _ROUTINE_SKIPS = frozenset({"bearing_gated"})  # counted in extras['skipped'], n
 
 SENSORS = ("gyro", "acc", "tilt", "odo", "bearing")  # keys of LindgrenEKF.history
 _NO_BEARINGS = np.zeros(0)
+_EMPTY = (0,)  # the shape of a frame's bearings when no scan arrived
+_MAX_TALLIES = 256  # status patterns a filter remembers the skip counts of (a handful occur)
 _F64 = np.dtype(np.float64)  # an unpickled array's dtype is an equal, other object
 _N_OUT_ROWS, _OUT_AT = kernel.N_OUT_ROWS, kernel.OUT_AT
 _S_T_STATE, _S_X, _S_COUNTS, _S_TORQUE = (kernel.S_T_STATE, kernel.S_X, kernel.S_COUNTS,
@@ -253,6 +255,7 @@ class LindgrenEKF:
         self._fixed_soil = float(r_w[0]), float(r_w[1]), float(k_s[0]), float(k_s[1])
         # sensors whose status is ACCEPTED in a frame where nothing is skipped
         self._n_sensors = 3 * self.uses_exteroceptive + self.uses_odometry
+        self._tallies: dict[tuple, tuple[int, tuple]] = {}  # see _count_skips
         # The state vector (layout kernel.S_*): the time the state refers to, the side-mean
         # cumulative counts and torques (left, right) of the last frame, x and P. A frame
         # writes the next one into the spare, which then changes place with it: nothing
@@ -377,8 +380,14 @@ class LindgrenEKF:
             if not (type(bearing_z) is type(bearing_t) is np.ndarray
                     and bearing_z.dtype is bearing_t.dtype is _F64
                     and bearing_z.strides == bearing_t.strides == _F64_STRIDES):
-                bearing_t, bearing_z, n_bad = self._frame_bearings(frame)
-                call = dispatcher  # it types whatever arrays these are
+                if (type(bearing_z) is type(bearing_t) is np.ndarray
+                        and bearing_z.shape == bearing_t.shape == _EMPTY):
+                    # no scan this frame (numpy gives an empty array the strides (0,)): the
+                    # entry's own empty array, not the dispatcher's typing of every argument
+                    bearing_t = bearing_z = _NO_BEARINGS
+                else:
+                    bearing_t, bearing_z, n_bad = self._frame_bearings(frame)
+                    call = dispatcher  # it types whatever arrays these are
         else:
             bearing_t = bearing_z = _NO_BEARINGS
         # Python floats: numba's dispatcher types them faster than numpy scalars
@@ -401,7 +410,8 @@ class LindgrenEKF:
         if n_accepted == m + self._n_sensors and not n_bad:  # all accepted
             self._n_bearings_used += m
         else:
-            self._count_skips(m, _status(out.ravel(), m), n_bad)
+            at = _OUT_AT + 2 * m + kernel.N_OUT_FIXED
+            self._count_skips(tuple(out.ravel()[at:at + m + 4].tolist()), n_bad)
         return self._estimate(r, out[:3])
 
     def _refilter(self, frame: SensorFrame, code: float, *args: float) -> tuple:
@@ -426,23 +436,56 @@ class LindgrenEKF:
         counts = self._side_counts(frame) if self.uses_odometry else (math.nan, math.nan)
         return (*counts, *self._side_torque(frame))
 
-    def _count_skips(self, m: int, status: list[int], n_bad: int) -> None:
-        """Count the frame's skipped measurements by reason (status codes of
-        :func:`.kernel.filter_frame`: m bearings, then gyro, acc, tilt, odo)."""
-        self._skip("bearing_nan", n_bad)
+    def _count_skips(self, status: tuple[float, ...], n_bad: int) -> None:
+        """Count the frame's skipped measurements by reason: ``status`` holds the status codes
+        of :func:`.kernel.filter_frame` (m bearings, then gyro, acc, tilt, odo), ``n_bad`` the
+        non-finite bearings it never saw."""
+        # A frame's codes repeat from frame to frame (a sensor that is missing stays missing),
+        # so what they add to the counts is worked out once per pattern and reused.
+        key = (status, n_bad)
+        tally = self._tallies.get(key)
+        if tally is None:
+            tally = self._tally(status, n_bad)
+            if len(self._tallies) < _MAX_TALLIES:
+                self._tallies[key] = tally
+        n_used, reasons = tally
+        self._n_bearings_used += n_used
+        skipped = self.skipped
+        debug = logger.isEnabledFor(logging.DEBUG)
+        for reason, n in reasons:
+            if reason in skipped:  # _skip's own path for a reason seen before, inlined
+                skipped[reason] += n
+                if debug:
+                    logger.debug("LindgrenEKF: skipping %d measurement(s) (%s)", n, reason)
+            else:
+                self._skip(reason, n)
+
+    def _tally(self, status: tuple[float, ...], n_bad: int) -> tuple[int, tuple]:
+        """What a frame's status codes (:meth:`_count_skips`) add up to: (bearings used,
+        ((reason, count), ...)) in the order the reasons first occur."""
+        m = len(status) - 4
+        reasons: dict[str, int] = {}
+
+        def add(reason: str, n: int = 1) -> None:
+            reasons[reason] = reasons.get(reason, 0) + n
+
+        if n_bad > 0:
+            add("bearing_nan", n_bad)
+        n_used = 0
         for code in status[:m]:
             if code == kernel.ACCEPTED:
-                self._n_bearings_used += 1
+                n_used += 1
             elif code == kernel.INVALID_SOIL:
-                self._skip("bearing_invalid_soil")
+                add("bearing_invalid_soil")
             else:
-                self._skip("bearing_gated" if code == kernel.GATED else "bearing_no_map")
+                add("bearing_gated" if code == kernel.GATED else "bearing_no_map")
         if self.uses_exteroceptive:
             for sensor, code in zip(("gyro", "acc", "tilt"), status[m:m + 3], strict=True):
                 if code != kernel.ACCEPTED:
-                    self._skip(f"{sensor}_nan")
+                    add(f"{sensor}_nan")
         if self.uses_odometry and status[m + 3] != kernel.ACCEPTED:
-            self._skip(_ODO_SKIPS[status[m + 3]])
+            add(_ODO_SKIPS[int(status[m + 3])])
+        return n_used, tuple(reasons.items())
 
     @property
     def history(self) -> dict[str, list[tuple[float, np.ndarray, np.ndarray]]]:

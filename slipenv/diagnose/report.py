@@ -350,7 +350,9 @@ def transfer_markdown(tr: dict | None) -> list[str]:
             f"{num(float(np.mean(end['after'])), '.4f')} | "
             f"{num(max(t['drift'], t['turn_drift']), '.4f')} | "
             + ("no: worse on the held-out parts" if worse else
-               "yes" if t.get("transfers") else "no: not material") + " |")
+               ("yes" if t.get("transfers") else "no: not material")
+               + (" (a part worse, by less than a material drift)"
+                  if t["makes_a_part_worse"] else "")) + " |")
     for v in tr.get("versus", []):
         # the parsimony test: a richer model is kept only beyond the held-out uncertainty
         lines += ["", f"{'+'.join(v['richer'])} against {'+'.join(v['simpler'])}: held-out "

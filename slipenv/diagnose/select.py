@@ -534,7 +534,8 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
     - nothing named on the pose channel: the geometric model is named;
     - a geometric cause named: replaced by the geometric model (fitted on the whole paths:
       a closed path determines the width only through its shape); dropped if it predicts the
-      held-out parts worse and no geometric model transfers;
+      held-out parts worse (``Transfer.materially_worse``: in sum, or on half of them or more
+      by a drift the gain rule would count as a fix) and no geometric model transfers;
     - another cause named (not a local one, which the short segments judge): tested the same
       way, and replaced by the geometric model when that transfers at least as well, or
       dropped when it predicts the held-out parts worse. A slip law that passed on the
@@ -577,10 +578,11 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
         if mine is None:
             mine = horizon.transfer(problem, parts, by, current.effects)
     info = {"held_out_by": by, "parts": len(parts),
-            "tested": [{**t.as_dict(), "transfers": t.passes(MIN_GAIN, MIN_DRIFT)}
+            "tested": [{**t.as_dict(MIN_DRIFT), "transfers": t.passes(MIN_GAIN, MIN_DRIFT)}
                        for t in tested],
             **({"versus": versus} if versus else {}),
-            **({"named_cause": {**mine.as_dict(), "transfers": mine.passes(MIN_GAIN, MIN_DRIFT)}}
+            **({"named_cause": {**mine.as_dict(MIN_DRIFT),
+                                "transfers": mine.passes(MIN_GAIN, MIN_DRIFT)}}
                if mine is not None else {})}
     # (mine is None only when nothing was named)
     replace = best is not None and (current is None or geometric_current or mine is None
@@ -598,14 +600,14 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
         info["geometric_on_segments"] = {"effects": list(geometric.effects),
                                          "error_ratio": geometric.error_ratio,
                                          "explains_the_cause": replace}
-    if slip_law and not replace and mine is not None and mine.worse and current is not None:
+    if (slip_law and not replace and mine is not None and mine.materially_worse(MIN_DRIFT)
+            and current is not None):
         # the named model is fitted on segments: held out the same way, it is the model that
         # must not make a held-out part worse (three slip parameters fitted on one half's
         # whole path alone are ill-determined)
         named = horizon.transfer(problem, parts, by, current.effects, on_segments=True)
         info["named_cause_on_segments"] = {
-            **named.as_dict(), "transfers": named.passes(MIN_GAIN, MIN_DRIFT),
-            "makes_parts_materially_worse": named.materially_worse(MIN_DRIFT)}
+            **named.as_dict(MIN_DRIFT), "transfers": named.passes(MIN_GAIN, MIN_DRIFT)}
         # failing its own test, it gives way to a geometric model that transfers
         replace = (best is not None and geometric is not None
                    and _worse_transfer_decision(False, True, named) == "dropped")
@@ -623,7 +625,7 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
         # the leave-one-part-out fits (the uncertainty the transfer shows)
         d = np.sqrt(np.maximum(np.diag(jack) / np.maximum(np.diag(whole.cov), 1e-300), 1.0))
         whole.cov = whole.cov * d[:, None] * d[None, :]
-        info.update(chosen=best.as_dict(), decision=(
+        info.update(chosen=best.as_dict(MIN_DRIFT), decision=(
             "named by transfer" if current is None else
             "the named geometric model refitted on the whole paths"
             if geometric_current and set(best.effects) == set(current.effects) else
@@ -640,7 +642,7 @@ def _transfer_route(problem: Problem, logs: list, final: dict[str, Candidate],
     if current is None:
         info["decision"] = "none transfers"
         return None, info
-    if mine is None or not mine.worse:
+    if mine is None or not mine.materially_worse(MIN_DRIFT):
         info["decision"] = (f"{current.name} kept: the geometric model transfers but does not "
                             "explain the held-out segments as well" if geometric is not None
                             else "kept")

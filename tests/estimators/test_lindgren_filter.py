@@ -345,6 +345,49 @@ def test_nan_optional_sensors_are_counted_and_logged(caplog: pytest.LogCaptureFi
     assert np.all(np.isfinite(ekf.x))
 
 
+def test_skips_repeating_from_frame_to_frame_are_counted_each_time_and_warned_once(
+        caplog: pytest.LogCaptureFixture) -> None:
+    """A sensor missing in frame after frame: every missing reading counted, one warning per
+    reason, the rest logged at debug level; the accepted bearings still add up."""
+    run = synthetic(40)
+    ekf = LindgrenEKF(GEOM, 4, beacons_xy=CROSS)
+    ekf.reset(*run.truth[0, :3], run.frames[0])
+    n_missing = 0
+    with caplog.at_level(logging.DEBUG, logger="slipenv.estimators.lindgren.ekf"):
+        for k, f in enumerate(run.frames[1:], start=1):
+            if k % 3:
+                f = dataclasses.replace(f, gyro_z_rad_s=math.nan, roll_rad=math.nan)
+                n_missing += 1
+            est = ekf.update(f)
+    assert n_missing > 20
+    assert est.extras["skipped"]["gyro_nan"] == est.extras["skipped"]["tilt_nan"] == n_missing
+    assert len(ekf.history["gyro"]) == len(run.frames) - 1 - n_missing
+    for reason in ("gyro_nan", "tilt_nan"):
+        logged = [r for r in caplog.records if f"({reason})" in r.getMessage()]
+        assert [r.levelno for r in logged] == [logging.WARNING] + [logging.DEBUG] * (
+            n_missing - 1)
+    assert est.extras["n_bearings_used"] == len(ekf.history["bearing"]) > 0
+
+
+def test_a_frame_without_bearings_gives_one_state_whatever_its_empty_arrays() -> None:
+    """No scan in a frame: numpy's empty array (strides (0,)), an empty column of a 2-D array
+    and empty lists give the same state."""
+    run = synthetic(40)
+    empties = (np.zeros(0), np.zeros((0, 2))[:, 0], [])
+    ekfs = [LindgrenEKF(GEOM, 4, beacons_xy=CROSS) for _ in empties]
+    for ekf, empty in zip(ekfs, empties, strict=True):
+        ekf.reset(*run.truth[0, :3], run.frames[0])
+        for f in run.frames[1:]:
+            if len(f.beacon_times_s) == 0:
+                f = dataclasses.replace(f, beacon_bearings_rad=empty, beacon_times_s=empty)
+            ekf.update(f)
+    assert sum(len(f.beacon_times_s) == 0 for f in run.frames[1:]) > 5
+    for ekf in ekfs[1:]:
+        np.testing.assert_array_equal(ekf.x, ekfs[0].x)
+        np.testing.assert_array_equal(ekf.P, ekfs[0].P)
+        assert ekf.skipped == ekfs[0].skipped
+
+
 def test_history_layout() -> None:
     run = synthetic(40)
     ekf = LindgrenEKF(GEOM, 4, beacons_xy=default_beacons_xy())

@@ -3,6 +3,7 @@ real run; the offline filter passes and the helpers on their own."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -16,7 +17,7 @@ from slipenv.estimators.lindgren.models import TILT_SIGMA_RAD
 from slipenv.experiments import experiment, lindgren
 from slipenv.experiments.lindgren import report
 from slipenv.experiments.lindgren.calibration import effective_radius_m, radius_from_recording
-from slipenv.experiments.lindgren.filters import no_slip_odometry
+from slipenv.experiments.lindgren.filters import no_slip_odometry, replace_readings
 from slipenv.experiments.lindgren.metrics import torque_slip
 from slipenv.experiments.lindgren.recording import Recording
 from slipenv.experiments.lindgren.report import finite
@@ -333,6 +334,25 @@ def test_per_wheel_count_scale_gives_a_one_radius_filter_each_wheels_distance() 
     counts = np.array([1000.0, 1000.0])
     distance = counts * scale * radius / geom.counts_per_rad
     assert distance == pytest.approx(counts * np.array([0.24, 0.25]) / geom.counts_per_rad)
+
+
+def test_replaced_readings_are_the_frame_dataclasses_replace_gives() -> None:
+    """The offline passes change a frame's readings without SensorFrame's ``__init__``: the
+    same frame as ``dataclasses.replace``, frozen, and the recorded frame left as it was."""
+    frame = SensorFrame(1.0, np.array([10, 20]), np.array([3.0, 4.0]), gyro_z_rad_s=0.1,
+                        pitch_rad=0.02, beacon_bearings_rad=np.array([0.2]),
+                        beacon_times_s=np.array([0.95]))
+    changes = {"enc_counts": frame.enc_counts * np.array([0.9, 1.1]), "gyro_z_rad_s": math.nan,
+               "pitch_rad": math.nan, "beacon_bearings_rad": np.zeros(0),
+               "beacon_times_s": np.zeros(0)}
+    new = replace_readings(frame, changes)
+    assert type(new) is SensorFrame and new == dataclasses.replace(frame, **changes)
+    assert new.wheel_torque_nm is frame.wheel_torque_nm and new.t_s == 1.0
+    assert frame.gyro_z_rad_s == 0.1 and len(frame.beacon_times_s) == 1
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        new.t_s = 2.0  # type: ignore[misc]
+    # valid only while SensorFrame's __init__ sets the fields and checks nothing
+    assert not hasattr(SensorFrame, "__post_init__")
 
 
 def test_okello_curve_position_inverts_the_secant_ratio() -> None:
