@@ -107,6 +107,22 @@ def test_single_real_optiodom_drifting_run_gets_a_geometric_cause(name, width):
     assert report["calibration"]["wheel_separation_m"][0] == pytest.approx(width, abs=0.001)
 
 
+@needs_optiodom
+def test_a_square_run_is_named_when_its_width_harms_one_half_by_less_than_a_material_drift():
+    # run 1 of this session: the width fitted on the second half leaves the first half's
+    # position error 1.3 times larger in mean square, but by a drift of 0.2 % of the distance
+    # (a fix must reach 0.5 %), and both halves together gain: the width is named
+    from slipenv.logs.optiodom import list_optiodom_runs, load_optiodom_run
+
+    run = next(r for r in list_optiodom_runs(OPTIODOM) if r.name == "square_230620202144_run-01")
+    report, _ = _diagnose(load_optiodom_run(run))
+    assert report["cause"] == "track_width", report["transfer"]["decision"]
+    width = next(t for t in report["transfer"]["tested"] if t["effects"] == ["track_width"])
+    assert width["makes_a_part_worse"] and not width["makes_parts_materially_worse"]
+    assert max(width["per_part_error_ratio"]) > 1.0 > width["error_ratio"]
+    assert report["calibration"]["wheel_separation_m"][0] == pytest.approx(0.2015, abs=0.001)
+
+
 def test_two_logs_are_cut_into_blocks_in_time_each_its_own_fold():
     arrays = [{"t": np.arange(100.0)}, {"t": np.arange(80.0)}]
     parts = horizon.blocks(arrays, n_folds=6)
