@@ -166,7 +166,8 @@ def vehicle_table(results: list[dict], vehicles: list[str]) -> str:
                 cells.append("–")
             elif effect == "none":
                 alarms = sum(r["cause"] != "none" for r in rs)
-                cells.append(f"{len(rs) - alarms}/{len(rs)} ({alarms} false alarms)")
+                cells.append(f"{len(rs) - alarms}/{len(rs)} ({alarms} false alarm"
+                             f"{'' if alarms == 1 else 's'})")
             else:
                 conf = [r["cause"] for r in rs if r["confounded"]]
                 cells.append(f"{sum(r['cause'] == effect for r in rs)}/{len(rs)}"
