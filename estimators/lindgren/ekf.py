@@ -89,11 +89,11 @@ def _frame_entry(dispatcher: Any) -> Callable[..., Any]:
     return entry
 
 
-def _status(out: np.ndarray, m: int) -> list[int]:
+def _status(out: np.ndarray, m: int) -> tuple[int, ...]:
     """The status codes of a frame with m bearings from the kernel's ``out`` (as one vector):
     bearings, then gyro, accelerometers, inclinometer, odometers."""
     at = _OUT_AT + 2 * m + kernel.N_OUT_FIXED
-    return [int(code) for code in out[at:at + m + 4].tolist()]
+    return tuple(int(code) for code in out[at:at + m + 4].tolist())
 
 
 def compiled_available() -> bool:
@@ -410,8 +410,7 @@ class LindgrenEKF:
         if n_accepted == m + self._n_sensors and not n_bad:  # all accepted
             self._n_bearings_used += m
         else:
-            at = _OUT_AT + 2 * m + kernel.N_OUT_FIXED
-            self._count_skips(tuple(out.ravel()[at:at + m + 4].tolist()), n_bad)
+            self._count_skips(_status(out.ravel(), m), n_bad)
         return self._estimate(r, out[:3])
 
     def _refilter(self, frame: SensorFrame, code: float, *args: float) -> tuple:
@@ -436,7 +435,7 @@ class LindgrenEKF:
         counts = self._side_counts(frame) if self.uses_odometry else (math.nan, math.nan)
         return (*counts, *self._side_torque(frame))
 
-    def _count_skips(self, status: tuple[float, ...], n_bad: int) -> None:
+    def _count_skips(self, status: tuple[int, ...], n_bad: int) -> None:
         """Count the frame's skipped measurements by reason: ``status`` holds the status codes
         of :func:`.kernel.filter_frame` (m bearings, then gyro, acc, tilt, odo), ``n_bad`` the
         non-finite bearings it never saw."""
@@ -450,17 +449,10 @@ class LindgrenEKF:
                 self._tallies[key] = tally
         n_used, reasons = tally
         self._n_bearings_used += n_used
-        skipped = self.skipped
-        debug = logger.isEnabledFor(logging.DEBUG)
         for reason, n in reasons:
-            if reason in skipped:  # _skip's own path for a reason seen before, inlined
-                skipped[reason] += n
-                if debug:
-                    logger.debug("LindgrenEKF: skipping %d measurement(s) (%s)", n, reason)
-            else:
-                self._skip(reason, n)
+            self._skip(reason, n)
 
-    def _tally(self, status: tuple[float, ...], n_bad: int) -> tuple[int, tuple]:
+    def _tally(self, status: tuple[int, ...], n_bad: int) -> tuple[int, tuple]:
         """What a frame's status codes (:meth:`_count_skips`) add up to: (bearings used,
         ((reason, count), ...)) in the order the reasons first occur."""
         m = len(status) - 4
@@ -484,7 +476,7 @@ class LindgrenEKF:
                 if code != kernel.ACCEPTED:
                     add(f"{sensor}_nan")
         if self.uses_odometry and status[m + 3] != kernel.ACCEPTED:
-            add(_ODO_SKIPS[int(status[m + 3])])
+            add(_ODO_SKIPS[status[m + 3]])
         return n_used, tuple(reasons.items())
 
     @property
@@ -645,6 +637,6 @@ class LindgrenEKF:
         if reason not in self.skipped and reason not in _ROUTINE_SKIPS:
             logger.warning("LindgrenEKF: skipping measurement (%s); further ones are counted "
                            "in PoseEstimate.extras['skipped']", reason)
-        else:
+        elif logger.isEnabledFor(logging.DEBUG):  # a call per frame otherwise, for nothing
             logger.debug("LindgrenEKF: skipping %d measurement(s) (%s)", n, reason)
         self.skipped[reason] = self.skipped.get(reason, 0) + n
