@@ -402,13 +402,15 @@ class Transfer:
 
     def scale_change(self, other: Transfer | None = None) -> float:
         """How much this model changes the turn or the distance of the held-out parts, over
-        the nominal model's (or ``other``'s): the larger of |c_θ - c_θ'| and |c_d - c_d'|,
-        median over the parts [-]."""
+        the nominal model's (or ``other``'s), the same way on the parts: the larger of
+        |median(c_θ - c_θ')| and |median(c_d - c_d')|, the medians signed, over the parts
+        [-]. Fits that lengthen one held-out part's distance and shorten another's change
+        no scale the parts share: they cancel."""
         if self.scales is None:
             return 0.0
         ref = np.ones_like(self.scales) if other is None or other.scales is None \
             else other.scales
-        return float(np.median(np.abs(self.scales - ref).max(axis=1)))
+        return float(np.abs(np.median(self.scales - ref, axis=0)).max())
 
     def versus(self, simpler: Transfer, min_fall: float, times_left: float,
                min_drift: float) -> dict:

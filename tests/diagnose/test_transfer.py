@@ -83,6 +83,26 @@ def _parts(after, travel_m=1.0) -> horizon.Transfer:
                             yaw_after=np.zeros(n), travel_m=travel_m)
 
 
+def test_a_scale_the_held_out_parts_disagree_on_is_not_a_material_change():
+    # a clean skid-steer log's halves: the width and radii fitted on each half lengthen one
+    # held-out half's distance by 1.4 % and shorten the other's by 1.0 %, and remove a drift
+    # of 0.1 %: no scale the halves share, so not material (the false alarm this rule ends)
+    t = _parts([0.5, 0.35], travel_m=30.0)
+    t.pos_after = np.full(2, 0.995)
+    t.yaw_after = np.ones(2)
+    t.scales = np.array([[1.0015, 0.9905], [1.0011, 1.0139]])
+    assert t.scale_change() == pytest.approx(0.0022, abs=1e-4)
+    assert not t.passes(MIN_GAIN, MIN_DRIFT)
+    # the same size of change, the same way on both halves, is material
+    t.scales = np.array([[1.0015, 1.0095], [1.0011, 1.0139]])
+    assert t.scale_change() == pytest.approx(0.0117, abs=1e-4)
+    assert t.passes(MIN_GAIN, MIN_DRIFT)
+    # against another model, the signed difference of the two, median over the parts
+    other = _parts([0.5, 0.35], travel_m=30.0)
+    other.scales = np.array([[1.0, 1.0], [1.0, 1.02]])
+    assert t.scale_change(other) == pytest.approx(np.median([0.0095, -0.0061]), abs=1e-6)
+
+
 def test_worse_on_half_the_parts_or_in_sum_fails_the_transfer():
     assert _parts([0.1, 0.1, 0.1]).passes(MIN_GAIN, MIN_DRIFT)
     assert not _parts([0.1, 1.2, 1.1, 0.1]).passes(MIN_GAIN, MIN_DRIFT)  # two of four worse
