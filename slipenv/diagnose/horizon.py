@@ -469,11 +469,13 @@ class Transfer:
                     or 2 * int(np.sum(harmed)) >= self.after.size)
 
     def passes(self, min_gain: float, min_drift: float) -> bool:
-        """Material transfer: the held-out error falls by ``min_gain`` overall and on most
-        parts, and the model is material: the drift it removes, or the change it makes to
-        the turn or the distance of the parts, is ``min_drift`` of the distance or of the
-        angle turned (on a closed path the error does not grow along the path, so the drift
-        read from its RMS understates a turn-scale error: the scale says it directly)."""
+        """Material transfer: the held-out error falls by ``min_gain`` overall, the model
+        makes no part worse as :meth:`materially_worse` reads harm (so one of two halves may
+        be worse by less than ``min_drift``), and the model is material: the drift it
+        removes, or the change it makes to the turn or the distance of the parts
+        (:meth:`scale_change`), is ``min_drift`` of the distance or of the angle turned (on a
+        closed path the error does not grow along the path, so the drift read from its RMS
+        understates a turn-scale error: the scale says it directly)."""
         return (1.0 - self.ratio >= min_gain and not self.materially_worse(min_drift)
                 and max(self.drift, self.turn_drift, self.scale_change()) >= min_drift)
 
