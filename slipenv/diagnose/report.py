@@ -341,8 +341,7 @@ def transfer_markdown(tr: dict | None) -> list[str]:
         rows.append(("+".join(t["effects"]) + " (fitted on segments)", t))
     for label, t in rows:
         end = t["final_position_error_m"]
-        worse = (t["makes_parts_materially_worse"] if "makes_parts_materially_worse" in t
-                 else t["makes_a_part_worse"])
+        worse = t["makes_parts_materially_worse"]
         lines.append(
             f"| {label} | {num(t['error_ratio'], '.3f')} | "
             f"{', '.join(num(r, '.2f') for r in t['per_part_error_ratio'])} | "

@@ -187,8 +187,10 @@ def test_the_transfer_section_judges_a_slip_law_kept_on_segments_by_material_har
             "per_part_error_ratio": [0.49, 1.03], "drift": 0.003, "turn_drift": 0.0,
             "final_position_error_m": {"before": [0.13, 0.24], "after": [0.10, 0.18]}}
     tr = {"held_out_by": "half", "parts": 2, "decision": "slope_side_slip kept",
-          "tested": [{**half, "effects": ["track_width"], "makes_a_part_worse": True}],
-          "named_cause": {**half, "makes_a_part_worse": True},
+          "tested": [{**half, "effects": ["track_width"], "makes_a_part_worse": True,
+                      "makes_parts_materially_worse": True}],
+          "named_cause": {**half, "makes_a_part_worse": True,
+                          "makes_parts_materially_worse": True},
           "named_cause_on_segments": {**half, "makes_a_part_worse": True,
                                       "makes_parts_materially_worse": False}}
     rows = {line.split(" | ")[0]: line for line in transfer_markdown(tr) if line.startswith("| ")}
