@@ -225,7 +225,8 @@ def add_reproduce(sub: SubParsers) -> argparse.ArgumentParser:
     p.add_argument("--vehicle", type=tracked_vehicle_name, default=None,
                    help="yamauchi: run on this tracked vehicle preset (None: "
                         "tracked_patako_wong_chiang, the Wong-Chiang track model, the env's; "
-                        "tracked_patako: the per-wheel law)")
+                        "tracked_patako: the per-wheel law; tracked_patako_decoupled: "
+                        "Ishigami's decoupled shear law, its moduli calibrated on Endo's n)")
     p.add_argument("--soil", type=soil_name, default=None,
                    help="yamauchi: run on this soil preset (None: toyoura_sand, the env's; "
                         "that world is the one --save-model needs)")

@@ -175,7 +175,11 @@ class Simulator:
         if vehicle.track_model == "wong_chiang":
             self.injector = TrackSoilInjector(
                 self.client, vehicle, self.body, self.terrain.body_id, self.force_model,
-                self.soil_map, self.dt_s, TrackModelParams(shear_law=vehicle.track_shear_law))
+                self.soil_map, self.dt_s, TrackModelParams(
+                    shear_law=vehicle.track_shear_law,
+                    longitudinal_shear_modulus_ratio=(
+                        vehicle.track_longitudinal_shear_modulus_ratio),
+                    lateral_shear_modulus_ratio=vehicle.track_lateral_shear_modulus_ratio))
         else:
             self.injector = WheelSoilInjector(
                 self.client, vehicle, self.body, self.terrain.body_id, self.force_model,

@@ -139,6 +139,12 @@ class TrackModelParams:
         resultant law on rigid ground). The vehicle's ``track_shear_law`` sets it (Patako's
         preset keeps the resultant law: ``slipenv.vehicles.presets.tracked_patako_wong_chiang``
         says why).
+    longitudinal_shear_modulus_ratio, lateral_shear_modulus_ratio : float
+        K_x/K and K_y/K of the decoupled law (``track.decoupled_stress_pa``): the shear
+        deformation moduli along and across the track over the soil's K (Ishigami et al. 2007
+        identify separate K_x, K_y for a grousered wheel on Toyoura sand). 1: the soil's K.
+        The vehicle's ``track_longitudinal_shear_modulus_ratio`` and
+        ``track_lateral_shear_modulus_ratio`` set them; the resultant law ignores them.
     """
 
     n_cells: int = 16
@@ -148,13 +154,16 @@ class TrackModelParams:
     resistance_speed_mps: float = 1e-3
     max_wall_height_m: float | None = None
     shear_law: str = "resultant"
+    longitudinal_shear_modulus_ratio: float = 1.0
+    lateral_shear_modulus_ratio: float = 1.0
 
     def __post_init__(self) -> None:
         if self.shear_law not in SHEAR_LAWS:
             raise ValueError(f"shear_law={self.shear_law!r} must be one of {SHEAR_LAWS}")
         if not (isinstance(self.n_cells, int) and 4 <= self.n_cells <= 200):
             raise ValueError(f"n_cells must be an int in [4, 200], got {self.n_cells!r}")
-        for name in ("unit_weight_n_m3", "resistance_speed_mps", "direction_length_m"):
+        for name in ("unit_weight_n_m3", "resistance_speed_mps", "direction_length_m",
+                     "longitudinal_shear_modulus_ratio", "lateral_shear_modulus_ratio"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0.0):
                 raise ValueError(f"{name} must be finite and > 0, got {v!r}")
@@ -284,7 +293,9 @@ class TrackSoilInjector:
                         cell_mass_kg=self._cell_mass_kg,
                         unit_weight_n_m3=self.params.unit_weight_n_m3,
                         max_wall_height_m=self.max_wall_m,
-                        shear_law=float(SHEAR_LAWS.index(self.params.shear_law)))
+                        shear_law=float(SHEAR_LAWS.index(self.params.shear_law)),
+                        longitudinal_modulus_ratio=self.params.longitudinal_shear_modulus_ratio,
+                        lateral_modulus_ratio=self.params.lateral_shear_modulus_ratio)
         self._settings = np.array([settings[k] for k in SETTING_NAMES], dtype=float)
         self._contact_base = np.array(self.contact_base)
         # PyBullet through Bullet's C API where pybullet allows it (`native_queries`).

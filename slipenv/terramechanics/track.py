@@ -140,12 +140,13 @@ SOIL_ROWS = ("width_m", "inv_cell_area_m2", "k_c", "k_phi", "n_exp", "cohesion_p
 1/(b dx), Bekker's k_c, k_phi and n, cohesion c, tan phi, Janosi's K, phi."""
 (S_WIDTH, S_INV_AREA, S_KC, S_KPHI, S_N, S_C, S_TAN_PHI, S_K, S_PHI) = range(len(SOIL_ROWS))
 SETTING_NAMES = ("dx_m", "dt_s", "direction_length_m", "damping_ratio", "cell_mass_kg",
-                 "unit_weight_n_m3", "max_wall_height_m", "shear_law")
+                 "unit_weight_n_m3", "max_wall_height_m", "shear_law",
+                 "longitudinal_modulus_ratio", "lateral_modulus_ratio")
 """Entries of :func:`track_substep`'s ``settings`` array: cell length, substep, e_max, the
 dampers' zeta and cell mass, the soil's unit weight, the wall height where soil spills, the
-shear law's index in `SHEAR_LAWS`."""
+shear law's index in `SHEAR_LAWS`, the decoupled law's K_x/K and K_y/K (K the soil's)."""
 (P_DX, P_DT, P_E_MAX, P_ZETA, P_CELL_MASS, P_GAMMA, P_MAX_WALL,
- P_SHEAR_LAW) = range(len(SETTING_NAMES))
+ P_SHEAR_LAW, P_LONGITUDINAL_K, P_LATERAL_K) = range(len(SETTING_NAMES))
 SHEAR_LAWS = ("resultant", "decoupled")
 """The track's shear laws (module docstring): ``"resultant"``, Wong-Chiang's tau(|j|) against
 the sliding velocity; ``"decoupled"``, Ishigami et al.'s per-component law
@@ -221,15 +222,16 @@ def shear_direction(vx, vy, jx, jy, v_reg: float = DIRECTION_SPEED_MPS):
     return dx * inv, dy * inv
 
 
-def decoupled_stress_pa(jx_m: float, jy_m: float, strength_pa: float,
-                        shear_modulus_m: float) -> tuple[float, float, float, float]:
+def decoupled_stress_pa(jx_m: float, jy_m: float, strength_pa: float, shear_modulus_m: float,
+                        lateral_shear_modulus_m: float) -> tuple[float, float, float, float]:
     """Ishigami et al.'s decoupled shear stress (tau_x, tau_y) [Pa] of a displacement (j_x, j_y)
     [m], along the displacement (the soil resists with -tau), and each component's tangent
     stiffness d tau_x/d j_x, d tau_y/d j_y [Pa/m].
 
-    Each component is Janosi's law of its own displacement, tau_x = tau_max (1 - exp(-|j_x|/K))
-    sgn(j_x), tau_y likewise (Ishigami, Miwa, Nagatani & Yoshida, J. Field Robotics 24(3)
-    (2007), the shear stresses of a wheel's contact, there with separate K_x, K_y; one K here), and
+    Each component is Janosi's law of its own displacement, tau_x = tau_max (1 - exp(-|j_x|/K_x))
+    sgn(j_x), tau_y = tau_max (1 - exp(-|j_y|/K_y)) sgn(j_y) (Ishigami, Miwa, Nagatani &
+    Yoshida, J. Field Robotics 24(3) (2007), the shear stresses of a wheel's contact with
+    separate moduli K_x, K_y: ``shear_modulus_m`` and ``lateral_shear_modulus_m``), and
     the resultant is capped at the Mohr-Coulomb strength tau_max = c + p tan phi (Wong Eq.
     2.54; ``strength_pa``): independent components would otherwise reach sqrt 2 tau_max on a
     diagonal, more than the soil can carry. The sign comes from the displacement itself, not
@@ -238,23 +240,25 @@ def decoupled_stress_pa(jx_m: float, jy_m: float, strength_pa: float,
 
     The stiffnesses are the diagonal of the law's Jacobian, each component's derivative by its
     own displacement (what a damper per component needs, `soil_damper_forces`): below the cap
-    (tau_max - |tau_x|)/K = tau_max e^{-|j_x|/K}/K, tau_max/K at j = 0; on the cap, where
-    tau = tau_max g/|g| with g the uncapped (tau_x, tau_y)/tau_max, d tau_x/d j_x = tau_max
-    g_x' g_y^2/|g|^3 with g_x' = e^{-|j_x|/K}/K (the other component holds the cap's share).
+    (tau_max - |tau_x|)/K_x = tau_max e^{-|j_x|/K_x}/K_x, tau_max/K_x at j = 0; on the cap,
+    where tau = tau_max g/|g| with g the uncapped (tau_x, tau_y)/tau_max, d tau_x/d j_x =
+    tau_max g_x' g_y^2/|g|^3 with g_x' = e^{-|j_x|/K_x}/K_x (the other component holds the
+    cap's share), and likewise for y.
     """
-    inv_k = 1.0 / shear_modulus_m
-    decay_x = math.exp(-abs(jx_m) * inv_k)
-    decay_y = math.exp(-abs(jy_m) * inv_k)
-    gx = math.copysign(-math.expm1(-abs(jx_m) * inv_k), jx_m)
-    gy = math.copysign(-math.expm1(-abs(jy_m) * inv_k), jy_m)
+    inv_kx = 1.0 / shear_modulus_m
+    inv_ky = 1.0 / lateral_shear_modulus_m
+    decay_x = math.exp(-abs(jx_m) * inv_kx)
+    decay_y = math.exp(-abs(jy_m) * inv_ky)
+    gx = math.copysign(-math.expm1(-abs(jx_m) * inv_kx), jx_m)
+    gy = math.copysign(-math.expm1(-abs(jy_m) * inv_ky), jy_m)
     mag2 = gx * gx + gy * gy
     if mag2 > 1.0:  # the soil carries no more than its strength
         inv_mag = 1.0 / math.sqrt(mag2)
-        bend = strength_pa * inv_k * inv_mag * inv_mag * inv_mag
+        bend = strength_pa * inv_mag * inv_mag * inv_mag
         return (strength_pa * gx * inv_mag, strength_pa * gy * inv_mag,
-                bend * decay_x * gy * gy, bend * decay_y * gx * gx)
-    return (strength_pa * gx, strength_pa * gy, strength_pa * decay_x * inv_k,
-            strength_pa * decay_y * inv_k)
+                bend * decay_x * inv_kx * gy * gy, bend * decay_y * inv_ky * gx * gx)
+    return (strength_pa * gx, strength_pa * gy, strength_pa * decay_x * inv_kx,
+            strength_pa * decay_y * inv_ky)
 
 
 _decoupled = njit(cache=True)(decoupled_stress_pa)
@@ -390,7 +394,9 @@ def steady_track_forces(vx: float, vy: float, yaw_rate: float, y_track_m: float,
                         belt_speed_mps: float, length_m: float, width_m: float,
                         pressure_pa: float, cohesion_pa: float, tan_phi: float,
                         shear_modulus_m: float, n_quad: int = 4001,
-                        shear_law: str = "resultant") -> tuple[float, float, float]:
+                        shear_law: str = "resultant",
+                        lateral_shear_modulus_m: float | None = None
+                        ) -> tuple[float, float, float]:
     """The Wong-Chiang integrals F_x = b int tau_x dx, F_y = b int tau_y dx and
     M_z = b int (x tau_y - y_i tau_x) dx [N, N, N m] of one track under uniform pressure, in
     steady motion (Wong & Chiang 2001; Wong, Theory of Ground Vehicles, Ch. 7), with the stress
@@ -403,7 +409,8 @@ def steady_track_forces(vx: float, vy: float, yaw_rate: float, y_track_m: float,
                                        length_m, n_quad)
     strength = shear_strength_pa(pressure_pa, cohesion_pa, tan_phi)
     if shear_law == "decoupled":
-        stress = [decoupled_stress_pa(a, b, float(strength), shear_modulus_m)[:2]
+        k_y = shear_modulus_m if lateral_shear_modulus_m is None else lateral_shear_modulus_m
+        stress = [decoupled_stress_pa(a, b, float(strength), shear_modulus_m, k_y)[:2]
                   for a, b in zip(jx, jy, strict=True)]
         tx, ty = -np.array(stress).T
     else:
@@ -423,7 +430,9 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: 
                 dx_m: float, cohesion_pa: np.ndarray, tan_phi: np.ndarray,
                 shear_modulus_m: np.ndarray, out: np.ndarray | None = None,
                 decoupled: np.ndarray | None = None,
-                lateral_stiffness: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                lateral_stiffness: np.ndarray | None = None,
+                longitudinal_modulus_ratio: float = 1.0,
+                lateral_modulus_ratio: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Shear force of each cell on the track and its tangent stiffness.
 
     A cell's j is the mean of its two faces, e its centre value; the stress tau(|j|) is
@@ -437,7 +446,8 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: 
     set the stress is Ishigami et al.'s decoupled law instead (`decoupled_stress_pa`: each
     component of its own displacement, against j; e unused), f = -tau b dx, and the stiffness
     is each component's own, b dx d tau_x/d j_x returned and b dx d tau_y/d j_y written into
-    ``lateral_stiffness`` (n_tracks, n_cells) when given (0 on the other tracks).
+    ``lateral_stiffness`` (n_tracks, n_cells) when given (0 on the other tracks), with the
+    moduli K_x = ``longitudinal_modulus_ratio`` K and K_y = ``lateral_modulus_ratio`` K.
     """
     nt, nc = e.shape[1], e.shape[2]
     if out is None:
@@ -452,7 +462,9 @@ def cell_forces(j: np.ndarray, e: np.ndarray, pressure_pa: np.ndarray, width_m: 
             jy = (j[1, i, c] + j[1, i, c + 1]) * 0.5
             strength = _strength(pressure_pa[i, c], cohesion_pa[i], tan_phi[i])
             if own:
-                tx, ty, kx, ky = _decoupled(jx, jy, float(strength), shear_modulus_m[i])
+                tx, ty, kx, ky = _decoupled(jx, jy, float(strength),
+                                            shear_modulus_m[i] * longitudinal_modulus_ratio,
+                                            shear_modulus_m[i] * lateral_modulus_ratio)
                 stiffness[i, c] = kx * area
                 if lateral_stiffness is not None:
                     lateral_stiffness[i, c] = ky * area
@@ -713,7 +725,8 @@ def track_substep(load_n: np.ndarray, belt_speed_mps: np.ndarray, track_speed_mp
         decoupled[i] = decoupled_cells(settings[P_SHEAR_LAW], deformable[i])
     lateral = np.empty((nt, nc))
     f_shear, stiffness = cell_forces(j, e, pressure, width, dx, soil[S_C], soil[S_TAN_PHI],
-                                     soil[S_K], out[2:4], decoupled, lateral)
+                                     soil[S_K], out[2:4], decoupled, lateral,
+                                     settings[P_LONGITUDINAL_K], settings[P_LATERAL_K])
     dj = j[:, :, :-1] + j[:, :, 1:]
     dj -= j_old
     dj *= 0.5

@@ -238,6 +238,10 @@ class VehicleSpec:
         (Ishigami et al. 2007: each shear component of its own displacement, the resultant
         capped at the Mohr-Coulomb strength, where the soil deforms; on rigid ground the
         resultant law, the tread's Coulomb friction: ``slipenv.terramechanics.track``).
+    track_longitudinal_shear_modulus_ratio, track_lateral_shear_modulus_ratio : float
+        K_x/K and K_y/K of the ``"decoupled"`` shear law: its shear deformation moduli along
+        and across the track over the soil's Janosi K (Ishigami et al. 2007 identify separate
+        K_x, K_y for a grousered wheel). 1 (default): the soil's K; within [0.05, 20].
     pivot_axle : PivotAxleSpec | None
         A passive axle pivoting about the longitudinal axis (rocker suspension); ``None``: the
         chassis and all wheel mounts form one rigid body.
@@ -273,6 +277,8 @@ class VehicleSpec:
     contact_sinkage_m: float = 0.001
     track_model: str = "per_wheel"
     track_shear_law: str = "resultant"
+    track_longitudinal_shear_modulus_ratio: float = 1.0
+    track_lateral_shear_modulus_ratio: float = 1.0
     pivot_axle: PivotAxleSpec | None = None
     assumed: tuple[str, ...] = field(default_factory=tuple)
 
@@ -331,6 +337,13 @@ class VehicleSpec:
         if self.track_shear_law not in TRACK_SHEAR_LAWS:
             raise ValueError(f"{owner}.track_shear_law must be one of {TRACK_SHEAR_LAWS}, "
                              f"got {self.track_shear_law!r}")
+        for name in ("track_longitudinal_shear_modulus_ratio",
+                     "track_lateral_shear_modulus_ratio"):
+            ratio = getattr(self, name)
+            if not (isinstance(ratio, (int, float)) and math.isfinite(ratio)
+                    and 0.05 <= ratio <= 20.0):
+                raise ValueError(f"{owner}.{name} must be a number in [0.05, 20], "
+                                 f"got {ratio!r}")
         if self.urdf is not None and len(self.urdf_wheel_joints) != len(self.wheels):
             raise ValueError(f"{owner}: urdf_wheel_joints must name one joint per wheel")
         if (not isinstance(self.assumed, tuple)

@@ -165,3 +165,19 @@ def test_the_command_runs_the_envs_own_world_the_track_model_on_toyoura_sand():
         assert page_name(plan.vehicle, plan.soil) == "yamauchi"
         assert plan.circle_seeds == 3
     assert page_name(Settings().vehicle, Settings().soil) == "yamauchi"
+
+
+def test_a_world_calibration_names_the_presets_own_moduli():
+    """The calibration a world adds to ``metrics.calibrated`` states the moduli its preset
+    carries, so the page cannot drift from the vehicle it describes."""
+    from slipenv.experiments.yamauchi.settings import WORLD_CALIBRATED
+    from slipenv.vehicles.presets import VEHICLES
+
+    assert WORLD_CALIBRATED
+    for name, entries in WORLD_CALIBRATED.items():
+        spec = VEHICLES[name]()
+        assert spec.track_shear_law == "decoupled"
+        (label,) = entries
+        assert f"K_x = {spec.track_longitudinal_shear_modulus_ratio:g} K" in label
+        assert f"K_y = {spec.track_lateral_shear_modulus_ratio:g} K" in label
+        assert not set(entries) & set(CALIBRATED)

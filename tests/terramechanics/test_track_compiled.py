@@ -47,7 +47,8 @@ def _inputs(case: str, law: str = "resultant") -> dict:
             "shear_modulus_m": [0.025, 0.01], "friction_angle_rad": [0.49, 0.61]}
     settings = {"dx_m": 0.03, "dt_s": 1 / 240, "direction_length_m": 1e-3,
                 "damping_ratio": 1.0, "cell_mass_kg": 0.9, "unit_weight_n_m3": 13.1e3,
-                "max_wall_height_m": 0.1, "shear_law": float(SHEAR_LAWS.index(law))}
+                "max_wall_height_m": 0.1, "shear_law": float(SHEAR_LAWS.index(law)),
+                "longitudinal_modulus_ratio": 0.8, "lateral_modulus_ratio": 1.5}
     return {
         "load_n": rng.uniform(0.0, 40.0, NW), "belt_speed_mps": np.array(u),
         "track_speed_mps": np.array(vx), "lateral_speed_mps": rng.normal(0.0, 0.02, NT),

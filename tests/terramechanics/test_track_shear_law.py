@@ -211,7 +211,7 @@ def test_in_a_steady_turn_the_decoupled_cells_give_the_decoupled_integrals(
 def test_the_decoupled_law_is_the_plain_function_the_cells_compile():
     s = C + P * TAN_PHI
     for jx, jy in ((0.01, -0.02), (0.09, 0.08)):  # below the cap and on it
-        tx, ty, kx, ky = decoupled_stress_pa(jx, jy, s, K)
+        tx, ty, kx, ky = decoupled_stress_pa(jx, jy, s, K, K)
         fx, fy, kcx, kcy = _cells([jx], [jy], P, True, lateral=True)
         assert (-tx * B_W * DX, -ty * B_W * DX, kx * B_W * DX, ky * B_W * DX) == pytest.approx(
             (fx[0], fy[0], kcx[0], kcy[0]), rel=1e-12)
@@ -231,18 +231,25 @@ def test_the_shear_law_option_is_validated_and_named_in_the_error():
                             shear_law="vector")
 
 
-@pytest.mark.parametrize("downhill_deg", [-90.0, 180.0])  # side-on, facing uphill
+@pytest.mark.parametrize("downhill_deg,ratios", [(-90.0, (1.0, 1.0)), (180.0, (1.0, 1.0)),
+                                                  (-90.0, (2.3, 0.7))])
 def test_parked_on_a_15_degree_slope_with_the_decoupled_law_the_tracked_vehicle_holds(
-        downhill_deg):
-    """The vehicle's ``track_shear_law`` reaches the simulated cells, whose soil springs (no
-    direction state) and dampers hold it at rest on Yamauchi's steepest slope."""
+        downhill_deg, ratios):
+    """The vehicle's ``track_shear_law`` and lateral modulus reach the simulated cells, whose
+    soil springs (no direction state) and dampers hold it at rest on Yamauchi's steepest slope
+    (side-on or facing uphill)."""
     spec = dataclasses.replace(make_vehicle("tracked_patako_wong_chiang"),
-                               track_shear_law="decoupled")
+                               track_shear_law="decoupled",
+                               track_longitudinal_shear_modulus_ratio=ratios[0],
+                               track_lateral_shear_modulus_ratio=ratios[1])
     sim = Simulator(spec, TerrainSpec(kind="slope", slope_deg=15.0,
                                       downhill_azimuth_deg=downhill_deg),
                     make_force_model("janosi", spec), make_soil_map(DRY_SAND, None))
     try:
         assert sim.injector.params.shear_law == "decoupled"
+        params = sim.injector.params
+        assert (params.longitudinal_shear_modulus_ratio,
+                params.lateral_shear_modulus_ratio) == ratios
         sim.reset(0.0, 0.0, 0.0)
         start = np.array(hold(sim, 3.0).position_m)
         end = np.array(hold(sim, 10.0).position_m)
@@ -293,3 +300,61 @@ def test_on_rigid_ground_the_decoupled_vehicle_turns_as_the_resultant_one():
             sim.close()
     assert abs(poses["resultant"][-1, 3]) > math.radians(10.0)  # it did turn
     np.testing.assert_array_equal(poses["decoupled"], poses["resultant"])
+
+
+@pytest.mark.parametrize("ratio", [0.4, 3.0])
+def test_the_decoupled_law_takes_the_lateral_modulus_for_the_lateral_component(ratio):
+    """Ishigami et al.'s separate moduli: tau_x = tau_max (1 - e^{-|j_x|/K_x}), tau_y =
+    tau_max (1 - e^{-|j_y|/K_y}) below the cap, each stiffness tau_max e^{-|j|/K}/K of its
+    own modulus; on the cap the resultant is tau_max and the stiffnesses are the derivatives."""
+    s, k_y = C + P * TAN_PHI, ratio * K
+    for jx, jy in ((0.004, -0.006), (-0.01, 0.002), (0.0, 0.03)):
+        tx, ty, kx, ky = decoupled_stress_pa(jx, jy, s, K, k_y)
+        gx, gy = 1.0 - math.exp(-abs(jx) / K), 1.0 - math.exp(-abs(jy) / k_y)
+        if math.hypot(gx, gy) <= 1.0:
+            assert (tx, ty) == pytest.approx((math.copysign(s * gx, jx),
+                                              math.copysign(s * gy, jy)), rel=1e-12)
+            assert (kx, ky) == pytest.approx((s * math.exp(-abs(jx) / K) / K,
+                                              s * math.exp(-abs(jy) / k_y) / k_y), rel=1e-12)
+    for jx, jy in ((0.004, -0.006), (0.09, 0.08), (-0.2, 0.05)):  # free and capped
+        tx, ty, kx, ky = decoupled_stress_pa(jx, jy, s, K, k_y)
+        assert math.hypot(tx, ty) <= s * (1.0 + 1e-12)
+        h = 1e-8
+        dx = (decoupled_stress_pa(jx + h, jy, s, K, k_y)[0]
+              - decoupled_stress_pa(jx - h, jy, s, K, k_y)[0]) / (2 * h)
+        dy = (decoupled_stress_pa(jx, jy + h, s, K, k_y)[1]
+              - decoupled_stress_pa(jx, jy - h, s, K, k_y)[1]) / (2 * h)
+        assert (kx, ky) == pytest.approx((dx, dy), rel=1e-5, abs=1e-6 * s / K)
+
+
+def test_the_cells_take_the_modulus_ratios_and_the_resultant_law_ignores_them():
+    """K_x = 2 K and K_y = 3 K on the decoupled track: its force is the law's with those
+    moduli; the resultant law's track is unchanged."""
+    j = np.zeros((2, 2, 2))
+    j[0], j[1] = 0.01, 0.02
+    e = j[:, :, :1] * 1.0
+    b, c, tan_phi, k = soil(2)
+    flags = np.array([True, False])
+    pressure = np.full((2, 1), P)
+    (fx1, fy1), _ = cell_forces(j, e, pressure, b, DX, c, tan_phi, k, None, flags, None,
+                                1.0, 1.0)
+    (fx3, fy3), _ = cell_forces(j, e, pressure, b, DX, c, tan_phi, k, None, flags, None,
+                                2.0, 3.0)
+    tau = decoupled_stress_pa(0.01, 0.02, C + P * TAN_PHI, 2.0 * K, 3.0 * K)
+    assert (fx3[0, 0], fy3[0, 0]) == pytest.approx((-tau[0] * B_W * DX, -tau[1] * B_W * DX),
+                                                   rel=1e-12)
+    # softer springs: less stress for the same displacement
+    assert abs(fx3[0, 0]) < abs(fx1[0, 0]) and abs(fy3[0, 0]) < abs(fy1[0, 0])
+    assert (fx3[1, 0], fy3[1, 0]) == (fx1[1, 0], fy1[1, 0])  # the resultant law's track
+
+
+@pytest.mark.parametrize("axis", ["longitudinal", "lateral"])
+def test_the_modulus_ratios_are_validated_and_named_in_the_error(axis):
+    spec = tracked_patako_wong_chiang()
+    field = f"track_{axis}_shear_modulus_ratio"
+    assert getattr(spec, field) == 1.0
+    for bad in (0.0, -1.0, float("nan"), 100.0):
+        with pytest.raises(ValueError, match=field):
+            dataclasses.replace(spec, **{field: bad})
+    with pytest.raises(ValueError, match=f"{axis}_shear_modulus_ratio"):
+        TrackModelParams(**{f"{axis}_shear_modulus_ratio": 0.0})

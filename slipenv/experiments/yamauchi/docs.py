@@ -8,7 +8,10 @@ import math
 from collections.abc import Sequence
 from pathlib import Path as FsPath
 
+from slipenv.vehicles.presets import tracked_patako_decoupled
+
 from ..docs_page import command_line, copy_figures, figure_list, markdown_table, write_page
+from .paper import ENDO_N
 from .report import markdown_rows
 from .settings import (
     DEFAULT_SOIL,
@@ -16,6 +19,7 @@ from .settings import (
     ENV_ID,
     REPRODUCTION_SOIL,
     REPRODUCTION_VEHICLE,
+    TARGETS,
     page_name,
     world_of,
 )
@@ -100,7 +104,7 @@ LIMITS_MEASURED = LIMITS_HEAD + """
 - **Odometry.** The true β leaves the slip-compensated odometry at {true_beta_ratio:.2f} of
   gyrodometry counter-clockwise (the fitted Eq. 9: {fitted_ratio:.2f}; the paper: 0.18,
   target ≤ 0.4): with a perfect slip-angle regression what remains is Endo's slip
-  ratios.{split_sentence}{n_dir_sentence}{cm_sentence}
+  ratios.{split_sentence}{n_dir_sentence}{cm_sentence}{cv_sentence}{start_bullet}
 - **Circle.** On the odometry with the true β the feed-forward changes the mean error by a
   factor {true_beta_ff:.2f} against feedback, and steered on the truth with the gains tuned on
   rigid ground by {truth_ff:.2f} (the target asks ≤ 0.5); the true slip angle of the turning
@@ -131,6 +135,14 @@ VEHICLE_MODELS = {
         "(`slipenv/terramechanics/track.py`, `slipenv/sim/track_soil.py`)"),
 }
 """One sentence on each tracked vehicle's soil model (per-wheel law or Wong-Chiang track)."""
+_DECOUPLED = tracked_patako_decoupled()
+VEHICLE_MODELS["tracked_patako_decoupled"] = (
+    "the Wong-Chiang track model with Ishigami et al.'s decoupled shear law (each component "
+    "Janosi's law of its own displacement, the resultant capped at the Mohr-Coulomb strength, "
+    "where the soil deforms; the resultant law on rigid ground) and its two moduli calibrated "
+    "on the paper's Endo n (`benchmarks/yamauchi_shear_calibration.py`): "
+    f"K_x = {_DECOUPLED.track_longitudinal_shear_modulus_ratio:g} K along the track, "
+    f"K_y = {_DECOUPLED.track_lateral_shear_modulus_ratio:g} K across it")
 
 SOIL_NOTES = {
     "dry_sand": "Wong's dry sand (LLL), cohesive (c = 1.04 kPa)",
@@ -212,6 +224,59 @@ def split_sentence(lim: dict) -> str:
             f"the gyro) and Eq. 9's β {pair('slip_compensated_true_slips')} (the error of "
             f"Eq. 9's β, {reached('slip_compensated_true_slips')} the target); with both true "
             f"{pair('slip_compensated_true_slips_true_beta')}, the gyro's heading error.")
+
+
+def cv_sentence(m: dict, cfg: dict) -> str:
+    """The odometry ratio cross-validated by run beside the one split's; empty without it."""
+    cv, one = m.get("odometry_rmse_ratio_cross_validated"), m.get("odometry_rmse_ratio")
+    if not cv or not one:
+        return ""
+    return (f" Which runs one split holds out moves the ratio: {cfg.get('cv_folds', 3)}-fold "
+            "cross-validated by run (every run held out once, the same fits per fold) it is "
+            f"{cv['ccw']:.2f} / {cv['cw']:.2f} counter-clockwise / clockwise, against "
+            f"{one['ccw']:.2f} / {one['cw']:.2f} on the headline split.")
+
+
+def start_bullet(fall: dict | None, m: dict) -> str:
+    """The rotation runs started facing downhill, the other reading of §2.3's field, in
+    words; empty for a run without them."""
+    if not fall:
+        return ""
+    n, r, down_dir = fall["endo_n"], fall["odometry_rmse_ratio"], fall["endo_n_by_direction"]
+    steep = max(n, key=float)
+    across_dir = m.get("endo_n_by_direction") or {}
+
+    def ways(by_dir: dict) -> tuple | None:
+        pair = (by_dir.get(f"{steep}_ccw"), by_dir.get(f"{steep}_cw"))
+        return None if None in pair else pair
+
+    down, across = ways(down_dir), ways(across_dir)
+    n_ok = all(abs(v - ENDO_N[t]) <= TARGETS["endo_n_tolerance"] for t, v in n.items()
+               if t in ENDO_N)
+    odo_ok = all(v <= TARGETS["odometry_ratio_max"] for v in r.values())
+    causes = []
+    if across and abs(across[0] - across[1]) > 0.1:
+        causes.append(f"across the slope the uphill and downhill turns split n ({across[0]:.2f}"
+                      f" / {across[1]:.2f} at {steep}°)")
+    if n[steep] - n[min(n, key=float)] > 0.1:
+        causes.append("facing downhill n grows with the tilt")
+    met = m.get("targets_met") or {}
+    across_ok = (met.get("endo_n_within_0.05_paper_at_each_tilt", False)
+                 and met.get("slip_compensated_rmse_le_0.4_gyrodometry_both_directions", False))
+    verdict = (" Facing downhill the runs " + ("meet" if n_ok else "miss") + " the n target and "
+               + ("meet" if odo_ok else "miss") + " the odometry target.")
+    if causes and not across_ok and not (n_ok and odo_ok):
+        verdict += " Neither reading of the field gives both: " + "; ".join(causes) + "."
+    return ("\n- **Start heading.** §2.3 sets the robot \"parallel to the long side\" of a 2 × 1 m "
+            "field tilted \"by jacking up one side\", without saying which side: the runs above "
+            "start across the slope. Started facing downhill instead "
+            "(`metrics.limits.fall_line_start`, the same runs otherwise), Endo's n is "
+            + " / ".join(f"{v:.2f}" for v in n.values()) + " at " + "/".join(n) + "°"
+            + ("" if down is None else
+               f" (counter-clockwise / clockwise {down[0]:.2f} / {down[1]:.2f} at {steep}°)")
+            + " against the paper's " + " / ".join(f"{ENDO_N[t]:.3f}" for t in n if t in ENDO_N)
+            + f", and the held-out slip-compensated odometry {r['ccw']:.2f} / {r['cw']:.2f} of "
+            f"gyrodometry counter-clockwise / clockwise.{verdict}")
 
 
 def _law_result(g: dict) -> str:
@@ -326,6 +391,8 @@ def page_body(result: dict, figures: Sequence[str], command: str) -> str:
         + ", ".join(f"{100 * v:.0f} % at {t}°" for t, v in share.items())
         + " have true slips that break Eq. 8's sign rule (both tracks slipping the same way "
         "relative to their belts, a common-mode slip a ratio of the two cannot express).")
+    values["cv_sentence"] = cv_sentence(m, cfg)
+    values["start_bullet"] = start_bullet(lim.get("fall_line_start"), m)
     default = world_of(cfg.get("vehicle"), cfg.get("soil")) == (DEFAULT_VEHICLE, DEFAULT_SOIL)
     values["world"] = world_text(cfg.get("vehicle"), cfg.get("soil"))
     values["shipped"] = ((" and the one shipped\nin `slipenv/data`" if default else "")

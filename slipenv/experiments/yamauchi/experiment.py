@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import time
@@ -31,8 +32,10 @@ from .settings import (
     FULL,
     QUICK,
     TARGETS,
+    WORLD_CALIBRATED,
     Settings,
     is_env_world,
+    world_of,
 )
 from .slips import fit_n, slip_run
 
@@ -48,12 +51,56 @@ def score_direction(cfg: Settings, train: list, test: list, geom, direction: int
     te_runs = [r for r in test if r.direction == direction]
     te = [slip_run(r, geom, n_by_tilt[r.tilt_deg], cfg, cw.get(r.tilt_deg)) for r in te_runs]
     model = fit_slip_angle_runs(tr)
-    rmse = {k: float(np.sqrt(v.mean())) for k, v in
-            odometry_errors(te_runs, geom, n_by_tilt, model, n_clockwise_by_tilt).items()}
+    squared = odometry_errors(te_runs, geom, n_by_tilt, model, n_clockwise_by_tilt)
+    rmse = {k: float(np.sqrt(v.mean())) for k, v in squared.items()}
     limits = {k: rmse.pop(k) for k in list(rmse) if k.startswith("slip_compensated_true")}
     return {"model": model, "beta_rmse_rad": evaluate_runs(model, te), "test_runs": te_runs,
             "odometry_rmse_m": rmse, "true_beta_rmse_m": limits["slip_compensated_true_beta"],
-            "limits_rmse_m": limits}
+            "limits_rmse_m": limits, "squared_errors_m2": squared}
+
+
+def cross_validated_ratio(cfg: Settings, runs: list, geom, rng: np.random.Generator
+                          ) -> dict[str, float]:
+    """Slip-compensated / gyrodometry position RMSE per turning direction, ``cfg.cv_folds``-fold
+    cross-validated by run: the runs of every (tilt, direction) group dealt into folds at
+    random, each fold held out once while Endo's n (per tilt) and Eq. 9 (per direction) are
+    fitted on the others, the squared errors of every held-out run pooled. The same
+    protocol as the headline split, with every run scored once, so the ratio does not hang on
+    which third of the runs one split holds out."""
+    folds: list[list] = [[] for _ in range(cfg.cv_folds)]
+    for t in cfg.tilts_deg:
+        for d in cfg.directions:
+            group = [r for r in runs if r.tilt_deg == t and r.direction == d]
+            for k, i in enumerate(rng.permutation(len(group))):
+                folds[k % cfg.cv_folds].append(group[i])
+    pooled: dict[int, dict[str, list]] = {d: {} for d in cfg.directions}
+    for held in folds:
+        names = {r.name for r in held}
+        train = [r for r in runs if r.name not in names]
+        n_by_tilt = {t: fit_n([r for r in train if r.tilt_deg == t], geom,
+                              cfg.smooth_steps)[0].n for t in cfg.tilts_deg}
+        for d in cfg.directions:
+            errors = score_direction(cfg, train, held, geom, d, n_by_tilt)["squared_errors_m2"]
+            for key in ("slip_compensated", "gyrodometry"):
+                pooled[d].setdefault(key, []).append(errors[key])
+    return {"ccw" if d > 0 else "cw": math.sqrt(
+        np.concatenate(v["slip_compensated"]).mean() / np.concatenate(v["gyrodometry"]).mean())
+        for d, v in pooled.items()}
+
+
+def fall_line_start(cfg: Settings, geom, rng: np.random.Generator, progress: bool) -> dict:
+    """The rotation runs started facing downhill (``start_heading_deg`` -90), the other reading
+    of §2.3's field (module `settings`): Endo's n per tilt (every run) and per turning
+    direction, and the held-out slip-compensated / gyrodometry ratio per direction, split and
+    scored as the headline."""
+    runs = collect_runs(dataclasses.replace(cfg, start_heading_deg=-90.0), rng, progress)
+    train, test = split_runs(runs, cfg, rng)
+    ident = identify(cfg, train, test, geom)
+    return {"endo_n": {f"{t:g}": f.n for t, f in ident["fits"].items()},
+            "endo_n_by_direction": ident["n_by_direction"],
+            "odometry_rmse_ratio": {
+                d: v["odometry_rmse_m"]["slip_compensated"] / v["odometry_rmse_m"]["gyrodometry"]
+                for d, v in ident["by_dir"].items()}}
 
 
 def identify(cfg: Settings, train: list, test: list, geom) -> dict:
@@ -263,6 +310,10 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
     train, test = split_runs(runs, cfg, rng)
     ident = identify(cfg, train, test, geom)
     fits, n_by_tilt, by_dir = ident["fits"], ident["n_by_tilt"], ident["by_dir"]
+    cross_validated = (cross_validated_ratio(cfg, runs, geom, rng)
+                       if set(cfg.directions) == {1, -1} else None)
+    fall_line = (fall_line_start(cfg, geom, rng, progress)
+                 if cfg.start_heading_deg == 0.0 and max(cfg.tilts_deg) > 0.0 else None)
     main = by_dir["ccw"]
     model, n_circle = main["model"], n_by_tilt[cfg.circle_tilt_deg]
     flags = " ".join(world_options({"vehicle": cfg.vehicle, "soil": cfg.soil}))
@@ -293,6 +344,7 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
         "endo_common_mode_share": {f"{t:g}": common_mode_share(ident["samples"][t])
                                    for t in cfg.tilts_deg},
         "endo_r2": {f"{t:g}": endo_r2(ident["samples"][t], fits[t].n) for t in cfg.tilts_deg},
+        "fall_line_start": fall_line,
     }
     metrics = {
         "endo_n": {f"{t:g}": f.n for t, f in fits.items()},
@@ -322,6 +374,7 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
     ratios = {d: v["odometry_rmse_m"]["slip_compensated"] / v["odometry_rmse_m"]["gyrodometry"]
               for d, v in by_dir.items()}
     metrics["odometry_rmse_ratio"] = ratios
+    metrics["odometry_rmse_ratio_cross_validated"] = cross_validated
     # Endo's n per tilt and turning direction (training runs), Eq. 9 refitted on its
     # regressors: scored beside the pooled n the odometry keeps
     split = {d: v["n_by_direction"] for d, v in by_dir.items() if "n_by_direction" in v}
@@ -339,7 +392,8 @@ def run(quick: bool = False, out_dir: str = "runs/reproduce_yamauchi",
         "feedback_gyrodometry": following["feedback_gyrodometry"]["completed"],
         "feedforward_slip_compensated": following["feedforward"]["completed"]}
     metrics["laps_run"] = cfg.circle_seeds
-    metrics["calibrated"] = dict(CALIBRATED)
+    metrics["calibrated"] = {**CALIBRATED, **WORLD_CALIBRATED.get(world_of(cfg.vehicle,
+                                                                          cfg.soil)[0], {})}
     n_paper = ENDO_N
     metrics["targets_met"] = {
         "endo_n_within_0.05_paper_at_each_tilt": all(

@@ -37,6 +37,11 @@ def table_rows(result: dict) -> list[tuple[str, str, str]]:
         rows.append(("odometry RMSE slip-compensated / gyrodometry, held-out runs, ccw / cw",
                      f"{1 - paper['odometry_improvement_vs_gyrodometry']:.2f}",
                      f"{ratios['ccw']:.2f} / {ratios['cw']:.2f}"))
+    cv = m.get("odometry_rmse_ratio_cross_validated")
+    if cv:
+        folds = result["settings"].get("cv_folds", 3)
+        rows.append((f"  same, {folds}-fold cross-validated by run (every run held out once)",
+                     "-", f"{cv['ccw']:.2f} / {cv['cw']:.2f}"))
     if split:
         rows.append(("  same, Endo n per tilt and turning direction (training runs, Eq. 9 "
                      "refitted on its regressors)", "-", f"{split['ccw']:.2f} / {split['cw']:.2f}"))
@@ -98,6 +103,14 @@ def table_rows(result: dict) -> list[tuple[str, str, str]]:
                      "/ gyrodometry" + ways, "-",
                      f"{ccw_cw('slip_compensated_true_slips_true_beta')} (the gyro's heading "
                      "error)"))
+    fall = lim.get("fall_line_start")
+    if fall:
+        n, ratio_fl = fall["endo_n"], fall["odometry_rmse_ratio"]
+        rows.append(("limit: rotation runs started facing downhill (§2.3 does not say which "
+                     "side of the field was raised): Endo n, tilt " + "/".join(n) + "°; "
+                     "slip-compensated / gyrodometry, held-out runs, ccw / cw", "-",
+                     " / ".join(f"{v:.2f}" for v in n.values())
+                     + f"; {ratio_fl['ccw']:.2f} / {ratio_fl['cw']:.2f}"))
     r2 = lim.get("endo_r2")
     if r2:
         rows.append(("limit: R² of Eq. 8 (log slip ratio against n log speed ratio) on the "

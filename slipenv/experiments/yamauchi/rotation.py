@@ -1,5 +1,6 @@
 """The rotation runs of Yamauchi §2.3: from rest, a constant twist (5 cm/s and 10/20/30 °/s)
-until the vehicle has turned about 90°, heading across the slope, turning either way.
+until the vehicle has turned about 90°, from a heading across the slope
+(``Settings.start_heading_deg``), turning either way.
 
 Each run is one :func:`slipenv.rollout.rollout` of the tracked env with a constant action,
 a :class:`TurnLimit` wrapper that ends it at 90° and an :class:`InfoRecorder` that keeps the
@@ -139,11 +140,13 @@ def rotation_run(cfg: Settings, tilt_deg: float, rate_dps: float, direction: int
 
 
 def collect_runs(cfg: Settings, rng: np.random.Generator, progress: bool) -> list[RotationRun]:
-    """Every rotation run of the experiment (seeded start-heading jitter and sensor noise)."""
+    """Every rotation run of the experiment (seeded start-heading jitter around
+    ``cfg.start_heading_deg`` and sensor noise)."""
     plan = [(t, w, d, i) for t in cfg.tilts_deg for w in cfg.turn_rates_dps
             for d in cfg.directions for i in range(cfg.repeats)]
     seeds = rng.integers(0, 2**31 - 1, size=len(plan))
     jitter = rng.uniform(-1.0, 1.0, size=len(plan)) * math.radians(cfg.heading_jitter_deg)
+    jitter += math.radians(cfg.start_heading_deg)
     steps = zip(iterate(plan, progress, "rotation runs"), seeds, jitter, strict=True)
     return [rotation_run(cfg, t, w, d, int(s), float(h),
                          f"tilt{t:g}_rate{w:g}_{'ccw' if d > 0 else 'cw'}_{i}")

@@ -27,6 +27,15 @@ CALIBRATED = {
 }
 """What was set from a measurement, and which: nothing else in the world is fitted. The
 odometry improvement (82 %) and the circle (9.1 -> 1.3 cm) are validation only."""
+WORLD_CALIBRATED = {
+    "tracked_patako_decoupled": {
+        "decoupled shear moduli K_x, K_y (K_x = 2.3 K, K_y = 0.69 K of toyoura_sand's K)":
+            "Sec. 2.4: Endo n 0.832 / 0.817 / 0.824 at 0 / 8 / 15 deg, the grid point of "
+            "benchmarks/yamauchi_shear_calibration.py nearest it at every tilt over three run "
+            "plans, rounded",
+    },
+}
+"""What a vehicle preset of another world adds to :data:`CALIBRATED`."""
 STEER_ON = ("observation", "true_beta", "truth")
 """What a circle episode steers on: the env's observation (what a user gets); slip-compensated
 odometry with the true β in place of Eq. 9 (a limit: perfect slip-angle regression, Endo's
@@ -48,6 +57,13 @@ class Settings:
     rotation_deg: float = 90.0  # §2.3: "about 90 degrees"
     heading_jitter_deg: float = 5.0  # start heading ± this, uniform (set by hand in the paper)
     max_rotation_s: float = 30.0
+    start_heading_deg: float = 0.0
+    """Start heading of a rotation run [deg] from across the slope (0: across, downhill to the
+    right; -90: facing downhill). §2.3 sets the robot "parallel to the long side" of a field
+    tilted "by jacking up one side": which side is not said, so the runs start across and a
+    limit starts them facing downhill (`metrics.limits.fall_line_start`)."""
+    cv_folds: int = 3
+    """Folds of the cross-validated odometry ratio (every run held out once, by run)."""
     test_fraction: float = 1.0 / 3.0
     smooth_steps: int = 5  # centred window of the slip derivatives [control steps]
     min_speed_mps: float = 0.01  # the slip angle of a vehicle at rest is undefined
@@ -71,6 +87,11 @@ class Settings:
             raise ValueError(f"tilts_deg must be angles in [0, 90), got {self.tilts_deg}")
         if set(self.directions) - {1, -1} or not self.directions:
             raise ValueError(f"directions must be 1 and/or -1, got {self.directions}")
+        if not -180.0 <= self.start_heading_deg <= 180.0:
+            raise ValueError(f"start_heading_deg must be in [-180, 180], got "
+                             f"{self.start_heading_deg}")
+        if self.cv_folds < 2:
+            raise ValueError(f"cv_folds must be >= 2, got {self.cv_folds}")
         for name in ("repeats", "smooth_steps", "circle_seeds"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")

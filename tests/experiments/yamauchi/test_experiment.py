@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from slipenv.envs.estimation import odometry_geometry
+from slipenv.experiments.yamauchi import experiment
 from slipenv.experiments.yamauchi.experiment import identify
 from slipenv.experiments.yamauchi.rotation import collect_runs, split_runs
 from slipenv.experiments.yamauchi.settings import Settings
@@ -79,3 +80,29 @@ def test_the_true_slips_and_slip_angle_leave_only_the_gyros_error(identified):
         lim, gyro = entry["limits_rmse_m"], entry["odometry_rmse_m"]["gyrodometry"]
         both = lim["slip_compensated_true_slips_true_beta"]
         assert both < 0.15 * gyro  # 0.05 / 0.03 here
+
+
+def test_cross_validation_holds_every_run_out_once_and_pools_its_errors(identified,
+                                                                         monkeypatch):
+    cfg, geom, train, test, _ = identified
+    runs = train + test
+    seen = []
+    real = experiment.score_direction
+
+    def spy(cfg_, fit_on, held, geom_, direction, n_by_tilt):
+        out = real(cfg_, fit_on, held, geom_, direction, n_by_tilt)
+        names = {r.name for r in held if r.direction == direction}
+        assert not names & {r.name for r in fit_on}  # never fitted on a run it scores
+        seen.append((direction, names, out["squared_errors_m2"]))
+        return out
+
+    monkeypatch.setattr(experiment, "score_direction", spy)
+    ratio = experiment.cross_validated_ratio(cfg, runs, geom, np.random.default_rng(1))
+    assert len(seen) == cfg.cv_folds * 2
+    for direction, key in ((1, "ccw"), (-1, "cw")):
+        held = [name for d, names, _ in seen if d == direction for name in names]
+        assert sorted(held) == sorted(r.name for r in runs if r.direction == direction)
+        pooled = {k: np.concatenate([e[k] for d, _, e in seen if d == direction])
+                  for k in ("slip_compensated", "gyrodometry")}
+        assert ratio[key] == pytest.approx(
+            np.sqrt(pooled["slip_compensated"].mean() / pooled["gyrodometry"].mean()), rel=1e-12)

@@ -1,4 +1,5 @@
-"""The rotation run's stop rule and recorder, on a stand-in env (no physics)."""
+"""The rotation run's stop rule and recorder, on a stand-in env (no physics), and its start
+heading in the tracked env."""
 
 from __future__ import annotations
 
@@ -6,7 +7,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from slipenv.experiments.yamauchi.rotation import InfoRecorder, TurnLimit
+from slipenv.experiments.yamauchi.rotation import InfoRecorder, TurnLimit, collect_runs
+from slipenv.experiments.yamauchi.settings import Settings
 from slipenv.rollout import rollout
 
 
@@ -58,3 +60,19 @@ def test_a_run_that_never_turns_far_enough_stops_at_the_step_limit():
 def test_a_turn_limit_must_be_positive():
     with pytest.raises(ValueError, match="limit_rad"):
         TurnLimit(Spinner(0.1), 0.0)
+
+
+@pytest.mark.parametrize("start_deg", [0.0, -90.0])
+def test_a_rotation_run_starts_at_the_settings_heading_from_across_the_slope(start_deg):
+    """Downhill is -y on the slope (heading -90° faces it): 0 starts across the slope, -90
+    facing downhill, the heading jitter off."""
+    cfg = Settings(tilts_deg=(8.0,), turn_rates_dps=(30.0,), directions=(1,), repeats=1,
+                   rotation_deg=5.0, heading_jitter_deg=0.0, start_heading_deg=start_deg)
+    (run,) = collect_runs(cfg, np.random.default_rng(0), False)
+    assert run.pose[0, 2] == pytest.approx(np.radians(start_deg), abs=0.02)
+
+
+@pytest.mark.parametrize("field,value", [("start_heading_deg", 200.0), ("cv_folds", 1)])
+def test_the_start_heading_and_the_folds_are_validated(field, value):
+    with pytest.raises(ValueError, match=field):
+        Settings(**{field: value})
