@@ -41,6 +41,7 @@ BOUNDS: dict[str, tuple[float, float]] = {
     "pivot_height_m": (-2.0, 2.0),  # roll axis above the wheel-centre plane
     "pivot_limit_rad": (1e-3, math.pi / 2),
     "pivot_damping_nms": (0.0, 1e5),  # [N m s/rad]
+    "shear_modulus_ratio": (0.05, 20.0),  # a track's K_x or K_y over the soil's K
 }
 
 
@@ -339,11 +340,7 @@ class VehicleSpec:
                              f"got {self.track_shear_law!r}")
         for name in ("track_longitudinal_shear_modulus_ratio",
                      "track_lateral_shear_modulus_ratio"):
-            ratio = getattr(self, name)
-            if not (isinstance(ratio, (int, float)) and math.isfinite(ratio)
-                    and 0.05 <= ratio <= 20.0):
-                raise ValueError(f"{owner}.{name} must be a number in [0.05, 20], "
-                                 f"got {ratio!r}")
+            _check_range(owner, name, getattr(self, name), "shear_modulus_ratio")
         if self.urdf is not None and len(self.urdf_wheel_joints) != len(self.wheels):
             raise ValueError(f"{owner}: urdf_wheel_joints must name one joint per wheel")
         if (not isinstance(self.assumed, tuple)

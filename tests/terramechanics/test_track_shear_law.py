@@ -185,23 +185,26 @@ def test_straight_driving_both_laws_give_wongs_track_thrust():
         assert fx == pytest.approx(wong, rel=1e-3) and abs(fy) < 1e-9 * wong
 
 
-@pytest.mark.parametrize("v,radius,vy,ratio_outer,ratio_inner", [
-    (0.1, 0.5, 0.01, 0.8, 0.85), (0.05, 0.25, 0.0, 0.7, 0.7)])
+@pytest.mark.parametrize("v,radius,vy,ratio_outer,ratio_inner,moduli", [
+    (0.1, 0.5, 0.01, 0.8, 0.85, (1.0, 1.0)), (0.05, 0.25, 0.0, 0.7, 0.7, (1.0, 1.0)),
+    (0.05, 0.25, 0.0, 0.7, 0.7, (2.3, 0.69))])
 def test_in_a_steady_turn_the_decoupled_cells_give_the_decoupled_integrals(
-        v, radius, vy, ratio_outer, ratio_inner):
-    """The transient scheme at steady state with the decoupled law: each track's thrust and
-    lateral force within 5 % of the exact integrals of the same law, where the hull turns by
-    less than 2 rad while the soil passes under the track (the field's own accuracy bound)."""
+        v, radius, vy, ratio_outer, ratio_inner, moduli):
+    """The transient scheme at steady state with the decoupled law (the soil's K, or K_x and
+    K_y of their own, ``moduli`` times K): each track's thrust and lateral force within 5 % of
+    the exact integrals of the same law, where the hull turns by less than 2 rad while the
+    soil passes under the track (the field's own accuracy bound)."""
     omega, ys, us, j, e = steady_turn(v, radius, vy, ratio_outer, ratio_inner)
     b, c, tan_phi, k = soil(2)
     (fx, fy), _ = cell_forces(j, e, np.full((2, N), P), b, DX, c, tan_phi, k, None,
-                              np.ones(2, dtype=bool))
+                              np.ones(2, dtype=bool), None, *moduli)
     checked = 0
     for i in range(2):
         if omega * L / us[i] > 2.0:
             continue  # the upwinded field is smeared by several per cent (test_track.py)
-        exact = steady_track_forces(v, vy, omega, ys[i], us[i], L, B_W, P, C, TAN_PHI, K,
-                                    shear_law="decoupled")
+        exact = steady_track_forces(v, vy, omega, ys[i], us[i], L, B_W, P, C, TAN_PHI,
+                                    moduli[0] * K, shear_law="decoupled",
+                                    lateral_shear_modulus_m=moduli[1] * K)
         assert fx[i].sum() == pytest.approx(exact[0], rel=0.05)
         assert fy[i].sum() == pytest.approx(exact[1], abs=0.05 * abs(exact[0]))
         checked += 1
